@@ -1,0 +1,2 @@
+//! The `shapetrack` command-line tool.
+fn main() {}

@@ -1,0 +1,220 @@
+//! File formats in and out: MOTChallenge txt, MOTS txt (COCO RLE), 16-bit PNG instance masks,
+//! COCO-video / YouTube-VIS JSON, CVAT-for-video XML, VOT `groundtruth.txt`.
+//!
+//! Every reader turns text into [`Record`]s (one object in one frame) and reports problems as an
+//! [`IoError`] naming the file, the line (1-based), the column (1-based field or character) and
+//! what was expected. Readers are strict except where MOTChallenge itself is lenient: trailing
+//! fields, CRLF line ends, blank lines, comma or whitespace separators.
+
+pub mod motchallenge;
+pub mod rle;
+
+use crate::frame::{BBox, Mask, TrackedShape};
+pub use rle::{Rle, RleError};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Errors reading or writing annotation and result files.
+#[derive(Debug, Error)]
+pub enum IoError {
+    /// The file could not be read or written.
+    #[error("{file}: {source}")]
+    Io {
+        /// Path of the file.
+        file: String,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A value in a text file is malformed.
+    #[error("{file}:{line}:{column}: expected {expected}, found {found:?}")]
+    Parse {
+        /// Path (or a name for in-memory text).
+        file: String,
+        /// 1-based line number.
+        line: usize,
+        /// 1-based column (field number for delimited files, character for others).
+        column: usize,
+        /// What the reader expected there.
+        expected: String,
+        /// The text found (possibly shortened).
+        found: String,
+    },
+    /// An RLE mask string is malformed.
+    #[error("{file}:{line}: bad RLE mask: {source}")]
+    Rle {
+        /// Path of the file.
+        file: String,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with it.
+        #[source]
+        source: RleError,
+    },
+    /// A JSON document is malformed or does not have the expected structure.
+    #[error("{file}:{line}:{column}: {message}")]
+    Json {
+        /// Path of the file.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// An XML document is malformed or does not have the expected structure.
+    #[error("{file}:{line}:{column}: {message}")]
+    Xml {
+        /// Path of the file.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// An image file could not be decoded or has the wrong pixel type.
+    #[error("{file}: {message}")]
+    Image {
+        /// Path of the file.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The data is well-formed but inconsistent (e.g. a duplicate id in one frame).
+    #[error("{file}:{line}: {message}")]
+    Invalid {
+        /// Path of the file.
+        file: String,
+        /// 1-based line (0 when not tied to a line).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl IoError {
+    /// A parse error; `found` is shortened to keep messages readable.
+    pub fn parse(
+        file: &str,
+        line: usize,
+        column: usize,
+        expected: impl Into<String>,
+        found: &str,
+    ) -> IoError {
+        let found: String = if found.chars().count() > 40 {
+            found.chars().take(40).chain("…".chars()).collect()
+        } else {
+            found.to_string()
+        };
+        IoError::Parse {
+            file: file.to_string(),
+            line,
+            column,
+            expected: expected.into(),
+            found,
+        }
+    }
+}
+
+/// Reads a whole text file, naming the file in the error.
+pub fn read_text(path: &std::path::Path) -> Result<String, IoError> {
+    std::fs::read_to_string(path).map_err(|source| IoError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+/// Writes a whole text file, naming the file in the error.
+pub fn write_text(path: &std::path::Path, text: &str) -> Result<(), IoError> {
+    std::fs::write(path, text).map_err(|source| IoError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+/// Per-record flags that only some formats can express.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct RecordFlags {
+    /// Filled in by interpolation (offline gap filling, or a CVAT non-keyframe).
+    pub interpolated: bool,
+    /// Marked occluded by an annotator.
+    pub occluded: bool,
+}
+
+/// One object in one frame, the common currency of every format.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Record {
+    /// 1-based frame number.
+    pub frame: u32,
+    /// Track id (-1 for unlinked detections).
+    pub id: i64,
+    /// Bounding box.
+    pub bbox: BBox,
+    /// Confidence (results, detections) or the "consider" flag (MOTChallenge gt: 0 = ignore).
+    pub score: f64,
+    /// Class label (MOTChallenge gt column 8, MOTS class; -1 when absent).
+    pub class: i32,
+    /// Visibility ratio (MOTChallenge gt column 9; -1 when absent).
+    pub visibility: f64,
+    /// Instance mask, for mask formats.
+    pub mask: Option<Rle>,
+    /// Format-specific flags.
+    pub flags: RecordFlags,
+}
+
+impl Record {
+    /// A box record with default score 1, no class, no visibility, no mask.
+    pub fn from_box(frame: u32, id: i64, bbox: BBox) -> Record {
+        Record {
+            frame,
+            id,
+            bbox,
+            score: 1.0,
+            class: -1,
+            visibility: -1.0,
+            mask: None,
+            flags: RecordFlags::default(),
+        }
+    }
+
+    /// The record of a tracked shape; `img` (width, height) is needed to encode a mask.
+    pub fn from_tracked(s: &TrackedShape, img: Option<(u32, u32)>) -> Record {
+        let mask = match (&s.mask, img) {
+            (Some(m), Some((w, h))) => Some(Rle::from_mask(m, w, h)),
+            _ => None,
+        };
+        Record {
+            frame: s.frame,
+            id: s.id as i64,
+            bbox: s.bbox,
+            score: s.score,
+            class: s.class,
+            visibility: -1.0,
+            mask,
+            flags: RecordFlags {
+                interpolated: s.interpolated,
+                occluded: false,
+            },
+        }
+    }
+
+    /// The record's mask as a bitmap, when it has one.
+    pub fn mask_bitmap(&self) -> Option<Mask> {
+        self.mask.as_ref().map(Rle::to_mask)
+    }
+}
+
+/// Groups records by frame: `out[f]` holds the records of frame `f` (index 0 unused), for
+/// frames `1..=num_frames` (records beyond are dropped by the caller's choice of `num_frames`).
+pub fn by_frame(records: &[Record], num_frames: u32) -> Vec<Vec<&Record>> {
+    let mut out = vec![Vec::new(); num_frames as usize + 1];
+    for r in records {
+        if r.frame >= 1 && r.frame <= num_frames {
+            out[r.frame as usize].push(r);
+        }
+    }
+    out
+}

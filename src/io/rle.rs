@@ -1,0 +1,374 @@
+//! COCO run-length encoding of binary masks, byte-compatible with pycocotools.
+//!
+//! Runs go down columns (Fortran order), start with a run of zeros (possibly empty) and
+//! alternate. The compressed string form is pycocotools' `rleToString`: LEB128-like, 5 bits per
+//! character offset by 48, with runs after the second stored as deltas to the run two back
+//! (`i > 2`, a pycocotools quirk we keep for byte equality).
+
+use crate::frame::{FrameError, Mask};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Errors decoding an RLE.
+#[derive(Debug, Error, Clone, PartialEq, Eq)]
+pub enum RleError {
+    /// A character outside pycocotools' alphabet (ASCII 48..=111).
+    #[error("invalid character {ch:?} at byte {pos} of the RLE string")]
+    BadChar {
+        /// The offending character.
+        ch: char,
+        /// Byte offset.
+        pos: usize,
+    },
+    /// The string ends inside a multi-character number.
+    #[error("RLE string ends in the middle of a run length")]
+    Truncated,
+    /// A decoded run is negative.
+    #[error("RLE run {index} is negative ({value})")]
+    NegativeRun {
+        /// Run index.
+        index: usize,
+        /// Decoded value.
+        value: i64,
+    },
+    /// Runs do not add up to `height·width`.
+    #[error("RLE runs cover {covered} pixels but the mask is {height}x{width} = {expected}")]
+    SizeMismatch {
+        /// Pixels covered by the runs.
+        covered: u64,
+        /// Mask height.
+        height: u32,
+        /// Mask width.
+        width: u32,
+        /// `height·width`.
+        expected: u64,
+    },
+}
+
+/// A run-length encoded full-image binary mask (COCO layout).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Rle {
+    /// Image height.
+    pub height: u32,
+    /// Image width.
+    pub width: u32,
+    /// Alternating run lengths, zeros first, column-major.
+    pub counts: Vec<u32>,
+}
+
+impl Rle {
+    /// Encodes a row-major full-image bitmap (`width·height` bytes, non-zero = foreground).
+    pub fn encode(width: u32, height: u32, bitmap: &[u8]) -> Result<Rle, FrameError> {
+        let expected = width as usize * height as usize;
+        if bitmap.len() != expected {
+            return Err(FrameError::MaskSize {
+                len: bitmap.len(),
+                width,
+                height,
+                expected,
+            });
+        }
+        let mut counts = Vec::new();
+        let (mut prev, mut run) = (0u8, 0u32);
+        for x in 0..width as usize {
+            for y in 0..height as usize {
+                let v = (bitmap[y * width as usize + x] != 0) as u8;
+                if v != prev {
+                    counts.push(run);
+                    run = 0;
+                    prev = v;
+                }
+                run += 1;
+            }
+        }
+        counts.push(run);
+        Ok(Rle {
+            height,
+            width,
+            counts,
+        })
+    }
+
+    /// Encodes a [`Mask`] placed in an image of `width × height` (parts outside are clipped).
+    pub fn from_mask(mask: &Mask, width: u32, height: u32) -> Rle {
+        let mut counts = Vec::new();
+        let (mut prev, mut run) = (false, 0u32);
+        for x in 0..width as i32 {
+            for y in 0..height as i32 {
+                let v = mask.get(x, y);
+                if v != prev {
+                    counts.push(run);
+                    run = 0;
+                    prev = v;
+                }
+                run += 1;
+            }
+        }
+        counts.push(run);
+        Rle {
+            height,
+            width,
+            counts,
+        }
+    }
+
+    /// An all-background mask.
+    pub fn empty(width: u32, height: u32) -> Rle {
+        Rle {
+            height,
+            width,
+            counts: vec![width * height],
+        }
+    }
+
+    /// Decodes to a row-major full-image bitmap of 0/1 bytes.
+    pub fn decode(&self) -> Vec<u8> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut out = vec![0u8; w * h];
+        let mut pos = 0usize;
+        for (i, &c) in self.counts.iter().enumerate() {
+            let end = (pos + c as usize).min(w * h);
+            if i % 2 == 1 {
+                for p in pos..end {
+                    // column-major position p -> (x, y)
+                    let (x, y) = (p / h, p % h);
+                    out[y * w + x] = 1;
+                }
+            }
+            pos = end;
+        }
+        out
+    }
+
+    /// Decodes to a [`Mask`] cropped to its foreground.
+    pub fn to_mask(&self) -> Mask {
+        // The decoded bitmap always has width·height entries, so this cannot fail.
+        Mask::from_full(self.width, self.height, &self.decode()).unwrap_or_else(|_| Mask::empty())
+    }
+
+    /// Number of foreground pixels.
+    pub fn area(&self) -> u64 {
+        self.counts
+            .iter()
+            .skip(1)
+            .step_by(2)
+            .map(|&c| c as u64)
+            .sum()
+    }
+
+    /// Foreground pixel count shared with `other` (same image size assumed; 0 otherwise).
+    pub fn intersection(&self, other: &Rle) -> u64 {
+        if self.width != other.width || self.height != other.height {
+            return 0;
+        }
+        // Walk both run lists at once, as pycocotools' rleArea(rleMerge(..., intersect)).
+        let (a, b) = (&self.counts, &other.counts);
+        let (mut ia, mut ib) = (0usize, 0usize);
+        let (mut ra, mut rb) = (
+            a.first().copied().unwrap_or(0) as u64,
+            b.first().copied().unwrap_or(0) as u64,
+        );
+        let mut total = 0u64;
+        while ia < a.len() && ib < b.len() {
+            let step = ra.min(rb);
+            if ia % 2 == 1 && ib % 2 == 1 {
+                total += step;
+            }
+            ra -= step;
+            rb -= step;
+            if ra == 0 {
+                ia += 1;
+                ra = a.get(ia).copied().unwrap_or(0) as u64;
+            }
+            if rb == 0 {
+                ib += 1;
+                rb = b.get(ib).copied().unwrap_or(0) as u64;
+            }
+        }
+        total
+    }
+
+    /// Mask IoU as pycocotools' `iou(..., iscrowd=0)`: 0 when the union is empty.
+    pub fn iou(&self, other: &Rle) -> f64 {
+        let i = self.intersection(other);
+        let u = self.area() + other.area() - i;
+        if u == 0 {
+            0.0
+        } else {
+            i as f64 / u as f64
+        }
+    }
+
+    /// Union of two masks of the same size (pycocotools `merge(..., intersect=False)`).
+    pub fn union(&self, other: &Rle) -> Rle {
+        if self.width != other.width || self.height != other.height {
+            return self.clone();
+        }
+        let a = self.decode();
+        let b = other.decode();
+        let m: Vec<u8> = a.iter().zip(&b).map(|(x, y)| x | y).collect();
+        Rle::encode(self.width, self.height, &m).unwrap_or_else(|_| self.clone())
+    }
+
+    /// Compressed string form, identical to pycocotools' `rleToString`.
+    pub fn to_compressed(&self) -> String {
+        let mut s = String::with_capacity(self.counts.len() * 2);
+        for i in 0..self.counts.len() {
+            let mut x = self.counts[i] as i64;
+            if i > 2 {
+                x -= self.counts[i - 2] as i64;
+            }
+            loop {
+                let mut c = (x & 0x1f) as u8;
+                x >>= 5;
+                let more = if c & 0x10 != 0 { x != -1 } else { x != 0 };
+                if more {
+                    c |= 0x20;
+                }
+                s.push((c + 48) as char);
+                if !more {
+                    break;
+                }
+            }
+        }
+        s
+    }
+
+    /// Parses pycocotools' compressed string for an image of `height × width`.
+    pub fn from_compressed(s: &str, height: u32, width: u32) -> Result<Rle, RleError> {
+        let bytes = s.as_bytes();
+        let mut counts: Vec<u32> = Vec::new();
+        let mut p = 0usize;
+        while p < bytes.len() {
+            let (mut x, mut k) = (0i64, 0u32);
+            loop {
+                let Some(&b) = bytes.get(p) else {
+                    return Err(RleError::Truncated);
+                };
+                if !(48..=111).contains(&b) {
+                    return Err(RleError::BadChar {
+                        ch: b as char,
+                        pos: p,
+                    });
+                }
+                let c = (b - 48) as i64;
+                if k < 13 {
+                    x |= (c & 0x1f) << (5 * k);
+                }
+                let more = c & 0x20 != 0;
+                p += 1;
+                k += 1;
+                if !more {
+                    if c & 0x10 != 0 && k < 13 {
+                        x |= -1i64 << (5 * k);
+                    }
+                    break;
+                }
+            }
+            let m = counts.len();
+            if m > 2 {
+                x += counts[m - 2] as i64;
+            }
+            if !(0..=u32::MAX as i64).contains(&x) {
+                return Err(RleError::NegativeRun { index: m, value: x });
+            }
+            counts.push(x as u32);
+        }
+        let covered: u64 = counts.iter().map(|&c| c as u64).sum();
+        let expected = height as u64 * width as u64;
+        if covered != expected {
+            return Err(RleError::SizeMismatch {
+                covered,
+                height,
+                width,
+                expected,
+            });
+        }
+        Ok(Rle {
+            height,
+            width,
+            counts,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Strings produced by pycocotools 2.0 (`mask.encode(np.asfortranarray(m))['counts']`).
+    #[test]
+    fn matches_pycocotools_strings() {
+        // 4x3 image, foreground at (row 1, col 0), (row 2, col 0), (row 0, col 2).
+        let (h, w) = (4u32, 3u32);
+        let mut m = vec![0u8; (h * w) as usize];
+        for (r, c) in [(1, 0), (2, 0), (0, 2)] {
+            m[r * w as usize + c] = 1;
+        }
+        let rle = Rle::encode(w, h, &m).unwrap();
+        assert_eq!(rle.counts, vec![1, 2, 5, 1, 3]);
+        // Verified with pycocotools 2.0: mask.encode(np.asfortranarray(m))["counts"] == b"125ON".
+        assert_eq!(rle.to_compressed(), "125ON");
+        let back = Rle::from_compressed("125ON", h, w).unwrap();
+        assert_eq!(back, rle);
+        assert_eq!(back.decode(), m);
+    }
+
+    #[test]
+    fn roundtrip_large_runs() {
+        let (w, h) = (640u32, 480u32);
+        let mut m = vec![0u8; (w * h) as usize];
+        for y in 100..300 {
+            for x in 50..400 {
+                m[y * w as usize + x] = 1;
+            }
+        }
+        let rle = Rle::encode(w, h, &m).unwrap();
+        let s = rle.to_compressed();
+        let back = Rle::from_compressed(&s, h, w).unwrap();
+        assert_eq!(back.decode(), m);
+        assert_eq!(back.area(), 200 * 350);
+        let mask = back.to_mask();
+        assert_eq!(Rle::from_mask(&mask, w, h), rle);
+    }
+
+    #[test]
+    fn rejects_bad_strings() {
+        assert!(matches!(
+            Rle::from_compressed("1 2", 2, 2),
+            Err(RleError::BadChar { .. })
+        ));
+        assert!(matches!(
+            Rle::from_compressed("1", 2, 2),
+            Err(RleError::SizeMismatch { .. })
+        ));
+        assert!(matches!(
+            Rle::from_compressed("P", 2, 2),
+            Err(RleError::Truncated)
+        ));
+    }
+
+    #[test]
+    fn iou_by_runs_equals_bitmap_iou() {
+        let (w, h) = (7u32, 5u32);
+        let a: Vec<u8> = (0..35).map(|i| ((i * 7 + 3) % 5 < 2) as u8).collect();
+        let b: Vec<u8> = (0..35).map(|i| ((i * 3 + 1) % 4 < 2) as u8).collect();
+        let (ra, rb) = (
+            Rle::encode(w, h, &a).unwrap(),
+            Rle::encode(w, h, &b).unwrap(),
+        );
+        let inter = a
+            .iter()
+            .zip(&b)
+            .filter(|(x, y)| **x == 1 && **y == 1)
+            .count() as u64;
+        assert_eq!(ra.intersection(&rb), inter);
+        let union = a
+            .iter()
+            .zip(&b)
+            .filter(|(x, y)| **x == 1 || **y == 1)
+            .count() as f64;
+        assert!((ra.iou(&rb) - inter as f64 / union).abs() < 1e-15);
+        assert_eq!(ra.union(&rb).area() as f64, union);
+    }
+}

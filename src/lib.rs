@@ -1,0 +1,43 @@
+//! # shapetrack
+//!
+//! A multi-object shape tracker after the thesis "Computational Geometric-Based Visual Shape
+//! Tracker": track-by-detection over instance masks (boxes are the degenerate case), with a
+//! computational-geometric region estimator, a shape context descriptor, a spatial colour
+//! analyser and, offline, a Kalman trajectory re-linker. The same core builds natively (the
+//! `shapetrack` CLI) and for `wasm32-unknown-unknown` (the browser app in `www/`).
+//!
+//! Module map, in pipeline order:
+//!
+//! - [`frame`]: frames (borrowed RGB/RGBA views), boxes, masks, detections, tracked shapes.
+//! - [`detect`]: the adaptive background subtractor and the [`detect::Detector`] trait.
+//! - [`geometry`]: Canny edges and contours, moments, Delaunay shells, GJK, broad phase.
+//! - [`features`]: SIFT, shape context, spatial colour analyser.
+//! - [`region`]: region clusters (thesis Alg. 2).
+//! - [`assign`]: cost matrices and optimal assignment.
+//! - [`motion`]: Kalman filters (constant velocity online, constant acceleration re-linker).
+//! - [`track`]: the online tracker, the offline re-linker, track lifecycle.
+//! - [`eval`]: MOT (CLEAR, Identity, HOTA) and VOT (accuracy, robustness, EAO) metrics.
+//! - [`io`]: MOTChallenge, MOTS, COCO-video, CVAT XML, PNG masks, VOT files.
+//! - [`synth`]: deterministic synthetic scenes with ground truth.
+//!
+//! The core never imports wasm-bindgen; the browser bindings live in `wasm` (wasm32 only).
+#![deny(missing_docs)]
+
+pub mod assign;
+pub mod detect;
+pub mod eval;
+pub mod features;
+pub mod frame;
+pub mod geometry;
+pub mod io;
+pub mod motion;
+pub mod region;
+pub mod synth;
+pub mod track;
+
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;
+
+pub use frame::{
+    BBox, Detection, Frame, FrameError, Mask, PixelFormat, Point, TrackState, TrackedShape,
+};

@@ -1,0 +1,1 @@
+//! region (work in progress).

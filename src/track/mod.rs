@@ -1,0 +1,1 @@
+//! track (work in progress).

@@ -1,0 +1,1 @@
+//! wasm bindings (work in progress).
