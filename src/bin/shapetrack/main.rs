@@ -1,2 +1,60 @@
-//! The `shapetrack` command-line tool.
-fn main() {}
+//! The `shapetrack` command-line tool: track, evaluate, generate synthetic scenes, benchmark.
+//!
+//! Each subcommand lives in its own module with its `Args` and `run`; flags other tools rely on
+//! are listed in the README and must not change.
+
+mod bench;
+mod eval;
+mod eval_vot;
+mod synth;
+mod track;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Result type of every subcommand: errors are printed, never panicked.
+pub type CliResult = Result<(), Box<dyn std::error::Error>>;
+
+#[derive(Parser)]
+#[command(name = "shapetrack", version, about = "Multi-object shape tracker: track, evaluate, synthesise, benchmark")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Track detections (MOTChallenge det.txt boxes or MOTS masks) and write results.
+    Track(track::Args),
+    /// Evaluate MOTChallenge-layout results: CLEAR, Identity and HOTA, as TrackEval.
+    Eval(eval::Args),
+    /// Evaluate VOT short-term results: accuracy, robustness, EAO.
+    EvalVot(eval_vot::Args),
+    /// Write a deterministic synthetic sequence in MOTChallenge layout.
+    Synth(synth::Args),
+    /// Measure speed (frames per second) of the tracker and its stages.
+    Bench(bench::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let res = match cli.cmd {
+        Cmd::Track(a) => track::run(a),
+        Cmd::Eval(a) => eval::run(a),
+        Cmd::EvalVot(a) => eval_vot::run(a),
+        Cmd::Synth(a) => synth::run(a),
+        Cmd::Bench(a) => bench::run(a),
+    };
+    match res {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            let mut src = e.source();
+            while let Some(s) = src {
+                eprintln!("  caused by: {s}");
+                src = s.source();
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
