@@ -158,8 +158,8 @@ pub fn clusters_from_pairs(
     let mut cluster_of_root = vec![usize::MAX; n_tracks + n_dets];
     let mut clusters: Vec<RegionCluster> = Vec::new();
     let mut lone_tracks = Vec::new();
-    for t in 0..n_tracks {
-        if !has_edge[t] {
+    for (t, &edge) in has_edge.iter().enumerate().take(n_tracks) {
+        if !edge {
             lone_tracks.push(t);
             continue;
         }
@@ -205,7 +205,16 @@ mod tests {
     fn components_of_hand_made_pairs() {
         // Tracks 0..5, detections 0..6.
         // {t0, t2, d1, d3} via t0-d1, t2-d1, t2-d3; {t1, d0}; {t4, d4, d5}; lone t3, d2.
-        let pairs = [(2, 3), (0, 1), (4, 5), (1, 0), (2, 1), (4, 4), (4, 4), (9, 0)];
+        let pairs = [
+            (2, 3),
+            (0, 1),
+            (4, 5),
+            (1, 0),
+            (2, 1),
+            (4, 4),
+            (4, 4),
+            (9, 0),
+        ];
         let e = clusters_from_pairs(5, 6, &pairs);
         assert_eq!(
             e.pairs,
@@ -247,7 +256,12 @@ mod tests {
     #[test]
     fn shells_to_clusters() {
         let sq = |x: f64, y: f64| ConvexShell::from_bbox(&BBox::new(x, y, 10.0, 10.0)).unwrap();
-        let tracks = [sq(0.0, 0.0), sq(100.0, 0.0), sq(200.0, 0.0), ConvexShell::empty()];
+        let tracks = [
+            sq(0.0, 0.0),
+            sq(100.0, 0.0),
+            sq(200.0, 0.0),
+            ConvexShell::empty(),
+        ];
         let dets = [sq(105.0, 5.0), sq(3.0, 3.0), sq(500.0, 0.0), sq(195.0, 0.0)];
         for phase in [BroadPhase::SortAndSweep, BroadPhase::AllPairs] {
             let e = region_clusters_with(&tracks, &dets, phase);

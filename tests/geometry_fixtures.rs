@@ -89,7 +89,10 @@ fn moments_match_opencv() {
         assert!((m.centroid.x - (cv.m10 / cv.m00 + 0.5)).abs() < 1e-9);
         assert!((m.centroid.y - (cv.m01 / cv.m00 + 0.5)).abs() < 1e-9);
         for (ours, theirs) in [(m.mu20, cv.mu20), (m.mu02, cv.mu02), (m.mu11, cv.mu11)] {
-            assert!((ours - theirs).abs() <= 1e-9 * (1.0 + theirs.abs()), "{ours} vs {theirs}");
+            assert!(
+                (ours - theirs).abs() <= 1e-9 * (1.0 + theirs.abs()),
+                "{ours} vs {theirs}"
+            );
         }
     }
 }
@@ -114,7 +117,11 @@ fn canny_on_disc_is_ring_at_radius() {
     for r in [6.0, 15.0, 40.0] {
         let (cx, cy) = (321.0, 123.0);
         let g = mask_geometry(&disc(cx, cy, r), &GeometryConfig::default()).unwrap();
-        assert!(g.edge_points.len() as f64 > 4.0 * r, "r {r}: {}", g.edge_points.len());
+        assert!(
+            g.edge_points.len() as f64 > 4.0 * r,
+            "r {r}: {}",
+            g.edge_points.len()
+        );
         let mut sectors = [false; 36];
         for p in &g.edge_points {
             let d = p.dist(Point::new(cx, cy));
@@ -123,12 +130,20 @@ fn canny_on_disc_is_ring_at_radius() {
             sectors[((a / std::f64::consts::TAU * 36.0) as usize).min(35)] = true;
         }
         assert!(sectors.iter().all(|&s| s), "r {r}: ring has gaps");
-        let mean = g.edge_points.iter().map(|p| p.dist(Point::new(cx, cy))).sum::<f64>()
+        let mean = g
+            .edge_points
+            .iter()
+            .map(|p| p.dist(Point::new(cx, cy)))
+            .sum::<f64>()
             / g.edge_points.len() as f64;
         assert!((mean - r).abs() < 0.5, "r {r}: mean radius {mean}");
         // The shell of a disc is close to the disc: area within 10%.
         let area = std::f64::consts::PI * r * r;
-        assert!((g.shell.area() - area).abs() < 0.1 * area, "{} vs {area}", g.shell.area());
+        assert!(
+            (g.shell.area() - area).abs() < 0.1 * area,
+            "{} vs {area}",
+            g.shell.area()
+        );
     }
 }
 
@@ -160,17 +175,21 @@ fn centroid_of_symmetric_shapes() {
     let inner = disc(cx, cy, 10.0);
     let ring: Vec<u8> = outer
         .pixels()
-        .map(|(x, y)| (x, y))
         .fold(vec![0u8; outer.data().len()], |mut acc, (x, y)| {
             if !inner.get(x, y) {
-                let i = (y - outer.y()) as usize * outer.width() as usize + (x - outer.x()) as usize;
+                let i =
+                    (y - outer.y()) as usize * outer.width() as usize + (x - outer.x()) as usize;
                 acc[i] = 1;
             }
             acc
         });
     let ring = Mask::new(outer.x(), outer.y(), outer.width(), outer.height(), ring).unwrap();
     let g = mask_geometry(&ring, &GeometryConfig::default()).unwrap();
-    assert!(g.centroid.dist(Point::new(cx, cy)) < 1e-9, "{:?}", g.centroid);
+    assert!(
+        g.centroid.dist(Point::new(cx, cy)) < 1e-9,
+        "{:?}",
+        g.centroid
+    );
     assert!(!ring.get(cx as i32, cy as i32));
     assert!(g.shell.contains(Point::new(cx, cy)));
 }

@@ -25,7 +25,15 @@ fn run_pairs(
                 return Ok(()); // touching within tolerance: either answer is right
             }
             let want = sd < 0.0;
-            prop_assert_eq!(check(&a, &b), want, "kind {:?} sd {} a {:?} b {:?}", kind, sd, a, b);
+            prop_assert_eq!(
+                check(&a, &b),
+                want,
+                "kind {:?} sd {} a {:?} b {:?}",
+                kind,
+                sd,
+                a,
+                b
+            );
             prop_assert_eq!(check(&b, &a), want, "swapped, kind {:?} sd {}", kind, sd);
             *decided.borrow_mut().entry((kind, want)).or_insert(0) += 1;
             Ok(())
@@ -91,7 +99,12 @@ fn parry_distance_matches_brute_force() {
             if sd < -PARRY_BAND {
                 prop_assert_eq!(d, 0.0);
             } else if sd > PARRY_BAND {
-                prop_assert!((d - sd).abs() <= 1e-3 + 3.5e-3 * sd, "parry {} brute {}", d, sd);
+                prop_assert!(
+                    (d - sd).abs() <= 1e-3 + 3.5e-3 * sd,
+                    "parry {} brute {}",
+                    d,
+                    sd
+                );
             }
             Ok(())
         })

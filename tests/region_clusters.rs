@@ -16,31 +16,24 @@ use shapetrack::Point;
 /// does), some empty.
 fn scene(max: usize) -> impl Strategy<Value = Vec<ConvexShell>> {
     (offset(), 20.0..400.0f64).prop_flat_map(move |(o, span)| {
-        prop::collection::vec(
-            (
-                (0.0..1.0f64, 0.0..1.0f64),
-                0.0..4.0f64,
-                0u8..20,
-            ),
-            0..max,
-        )
-        .prop_flat_map(move |v| {
-            v.into_iter()
-                .map(|((fx, fy), m, kind)| {
-                    shell_near(Point::new(o.x + fx * span, o.y + fy * span)).prop_map(
-                        move |s| {
-                            if kind == 0 {
-                                ConvexShell::empty()
-                            } else if kind < 8 {
-                                s.grown(m)
-                            } else {
-                                s
-                            }
-                        },
-                    )
-                })
-                .collect::<Vec<_>>()
-        })
+        prop::collection::vec(((0.0..1.0f64, 0.0..1.0f64), 0.0..4.0f64, 0u8..20), 0..max)
+            .prop_flat_map(move |v| {
+                v.into_iter()
+                    .map(|((fx, fy), m, kind)| {
+                        shell_near(Point::new(o.x + fx * span, o.y + fy * span)).prop_map(
+                            move |s| {
+                                if kind == 0 {
+                                    ConvexShell::empty()
+                                } else if kind < 8 {
+                                    s.grown(m)
+                                } else {
+                                    s
+                                }
+                            },
+                        )
+                    })
+                    .collect::<Vec<_>>()
+            })
     })
 }
 
@@ -156,9 +149,8 @@ proptest! {
 /// detection and nothing else, once the track shells are moved by the prediction.
 #[test]
 fn moved_shapes_cluster_with_their_detection() {
-    let sq = |x: f64, y: f64| {
-        ConvexShell::from_bbox(&shapetrack::BBox::new(x, y, 8.0, 8.0)).unwrap()
-    };
+    let sq =
+        |x: f64, y: f64| ConvexShell::from_bbox(&shapetrack::BBox::new(x, y, 8.0, 8.0)).unwrap();
     let mut tracks = Vec::new();
     let mut dets = Vec::new();
     for k in 0..10 {
@@ -173,5 +165,8 @@ fn moved_shapes_cluster_with_their_detection() {
     let raw: Vec<ConvexShell> = (0..10)
         .map(|k| sq(k as f64 * 30.0, (k % 3) as f64 * 30.0))
         .collect();
-    assert!(region_clusters(&raw, &dets).pairs.iter().all(|&(t, d)| t != d));
+    assert!(region_clusters(&raw, &dets)
+        .pairs
+        .iter()
+        .all(|&(t, d)| t != d));
 }

@@ -8,7 +8,11 @@ use crate::frame::BBox;
 /// (closed test on both axes), sorted by `(i, j)`. Boxes with non-finite coordinates match
 /// nothing.
 pub fn overlapping_box_pairs(a: &[BBox], b: &[BBox], slack: f64) -> Vec<(usize, usize)> {
-    let slack = if slack.is_finite() { slack.max(0.0) } else { 0.0 };
+    let slack = if slack.is_finite() {
+        slack.max(0.0)
+    } else {
+        0.0
+    };
     // One entry per box, sorted by its left edge; `side` 0 = a, 1 = b.
     let mut order: Vec<(f64, u8, usize)> = a
         .iter()

@@ -5,7 +5,7 @@
 //! the image's outermost row and column, and the border follower only starts an outer border
 //! next to a background pixel.
 
-use image::{GrayImage, Luma};
+use image::GrayImage;
 use imageproc::contours::{find_contours, BorderType};
 
 use super::shell::signed_area;
@@ -69,16 +69,15 @@ impl MaskCrop {
             .filter(|&v| v <= u32::MAX as usize)
             .ok_or_else(too_large)?;
         cw.checked_mul(ch).ok_or_else(too_large)?;
-        let mut image = GrayImage::new(cw as u32, ch as u32);
+        let mut buf = vec![0u8; cw * ch];
         for ly in ly0..=ly1 {
-            let row = &data[ly * w + lx0..=ly * w + lx1];
-            let cy = (ly - ly0 + pad_us) as u32;
-            for (i, &v) in row.iter().enumerate() {
-                if v != 0 {
-                    image.put_pixel((i + pad_us) as u32, cy, Luma([255]));
-                }
+            let src = &data[ly * w + lx0..=ly * w + lx1];
+            let start = (ly - ly0 + pad_us) * cw + pad_us;
+            for (o, &v) in buf[start..start + fw].iter_mut().zip(src) {
+                *o = if v != 0 { 255 } else { 0 };
             }
         }
+        let image = GrayImage::from_raw(cw as u32, ch as u32, buf).ok_or_else(too_large)?;
         Ok(MaskCrop {
             image,
             x0: mask.x() as i64 + lx0 as i64 - pad as i64,

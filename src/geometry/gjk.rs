@@ -217,7 +217,8 @@ pub fn intersects_thesis(a: &ConvexShell, b: &ConvexShell) -> bool {
         simplex.push(p);
         match simplex.as_slice() {
             // lineCase
-            &[bp, ap] => {
+            [bp, ap] => {
+                let (bp, ap) = (*bp, *ap);
                 let ab = bp - ap;
                 let ao = Point::new(-ap.x, -ap.y);
                 match normalize(triple_product(ab, ao, ab)) {
@@ -228,7 +229,8 @@ pub fn intersects_thesis(a: &ConvexShell, b: &ConvexShell) -> bool {
                 }
             }
             // triangleCase
-            &[cp, bp, ap] => {
+            [cp, bp, ap] => {
+                let (cp, bp, ap) = (*cp, *bp, *ap);
                 let ab = bp - ap;
                 let ac = cp - ap;
                 let ao = Point::new(-ap.x, -ap.y);

@@ -121,7 +121,11 @@ impl GeometryConfig {
             return bad("canny_low", self.canny_low, "must be finite and >= 0");
         }
         if !(self.canny_high.is_finite() && self.canny_high >= self.canny_low) {
-            return bad("canny_high", self.canny_high, "must be finite and >= canny_low");
+            return bad(
+                "canny_high",
+                self.canny_high,
+                "must be finite and >= canny_low",
+            );
         }
         Ok(())
     }
@@ -192,10 +196,7 @@ pub fn mask_geometry(mask: &Mask, cfg: &GeometryConfig) -> Result<ShapeGeometry,
     }
     mesh_pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     mesh_pts.dedup();
-    let mesh = Mesh::delaunay(
-        &mesh_pts,
-        Point::new(crop.x0 as f64, crop.y0 as f64),
-    )?;
+    let mesh = Mesh::delaunay(&mesh_pts, Point::new(crop.x0 as f64, crop.y0 as f64))?;
 
     Ok(ShapeGeometry {
         centroid,
@@ -241,7 +242,10 @@ mod tests {
         let mut full = Vec::new();
         for y in 0..n {
             for x in 0..n {
-                let (dx, dy) = (x as f64 + 0.5 - n as f64 / 2.0, y as f64 + 0.5 - n as f64 / 2.0);
+                let (dx, dy) = (
+                    x as f64 + 0.5 - n as f64 / 2.0,
+                    y as f64 + 0.5 - n as f64 / 2.0,
+                );
                 full.push((dx.hypot(dy) <= r) as u8);
             }
         }
@@ -255,7 +259,10 @@ mod tests {
         let m = disc(100, 80, 12.0);
         let g = mask_geometry(&m, &GeometryConfig::default()).unwrap();
         let c = g.centroid;
-        assert!((c.x - 100.0).abs() < 0.6 && (c.y - 80.0).abs() < 0.6, "{c:?}");
+        assert!(
+            (c.x - 100.0).abs() < 0.6 && (c.y - 80.0).abs() < 0.6,
+            "{c:?}"
+        );
         assert!(g.shell.len() >= 8);
         assert!(g.mesh.triangle_count() > 0);
         assert_eq!(g.mesh.outer_boundary(), g.shell);
@@ -291,7 +298,10 @@ mod tests {
         };
         assert!(matches!(
             mask_geometry(&Mask::new(0, 0, 1, 1, vec![1]).unwrap(), &bad),
-            Err(GeometryError::InvalidConfig { field: "canny_high", .. })
+            Err(GeometryError::InvalidConfig {
+                field: "canny_high",
+                ..
+            })
         ));
     }
 
@@ -303,6 +313,16 @@ mod tests {
         assert_eq!(g.shell.aabb(), BBox::new(10.0, 20.0, 30.0, 40.0));
         assert_eq!(g.mesh.triangle_count(), 4);
         assert!(box_geometry(&BBox::new(f64::NAN, 0.0, 1.0, 1.0)).is_err());
-        assert_eq!(box_geometry(&BBox::new(1.0, 1.0, 0.0, 0.0)).unwrap().shell.len(), 1);
+        assert_eq!(
+            box_geometry(&BBox::new(1.0, 1.0, 0.0, 0.0))
+                .unwrap()
+                .shell
+                .len(),
+            1
+        );
+        let flat = box_geometry(&BBox::new(1.0, 1.0, 0.0, 5.0)).unwrap();
+        assert_eq!(flat.shell.len(), 2);
+        assert_eq!(flat.mesh.triangle_count(), 0);
+        assert!(box_geometry(&BBox::new(0.0, 0.0, -1.0, 1.0)).is_err());
     }
 }

@@ -32,7 +32,8 @@ impl Moments {
         }
         // Sums in local (bitmap) coordinates: exact integers up to 2⁵³, and no cancellation
         // between large image offsets when central moments are derived from raw ones.
-        let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0u64, 0f64, 0f64, 0f64, 0f64, 0f64);
+        let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) =
+            (0u64, 0f64, 0f64, 0f64, 0f64, 0f64);
         for (ly, row) in mask.data().chunks_exact(w).enumerate() {
             let y = ly as f64;
             let (mut rn, mut rx, mut rxx) = (0u64, 0f64, 0f64);
@@ -60,10 +61,7 @@ impl Moments {
         let (cx, cy) = (sx / m00, sy / m00);
         Some(Moments {
             m00,
-            centroid: Point::new(
-                mask.x() as f64 + cx + 0.5,
-                mask.y() as f64 + cy + 0.5,
-            ),
+            centroid: Point::new(mask.x() as f64 + cx + 0.5, mask.y() as f64 + cy + 0.5),
             mu20: (sxx - cx * sx).max(0.0),
             mu02: (syy - cy * sy).max(0.0),
             mu11: sxy - cx * sy,

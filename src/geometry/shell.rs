@@ -307,10 +307,7 @@ impl ConvexShell {
 
 /// Whether two boxes overlap or lie within `slack` of each other (closed test).
 pub(crate) fn aabbs_overlap(a: &BBox, b: &BBox, slack: f64) -> bool {
-    a.x <= b.x2() + slack
-        && b.x <= a.x2() + slack
-        && a.y <= b.y2() + slack
-        && b.y <= a.y2() + slack
+    a.x <= b.x2() + slack && b.x <= a.x2() + slack && a.y <= b.y2() + slack && b.y <= a.y2() + slack
 }
 
 /// 2-D cross product (z of the 3-D one).
@@ -513,7 +510,9 @@ mod tests {
         }
         // Overshoot bound: no vertex further than margin / cos(π/8).
         for v in g.vertices() {
-            assert!(v.dist(Point::new(10.0, 10.0)) <= 2.0 / (std::f64::consts::PI / 8.0).cos() + 1e-9);
+            assert!(
+                v.dist(Point::new(10.0, 10.0)) <= 2.0 / (std::f64::consts::PI / 8.0).cos() + 1e-9
+            );
         }
         assert_eq!(p.grown(-1.0), p);
         assert_eq!(p.grown(f64::NAN), p);

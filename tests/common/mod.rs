@@ -147,17 +147,24 @@ pub fn shell_pair() -> impl Strategy<Value = (PairKind, ConvexShell, ConvexShell
                     pts.push(p + e * (t0 + (t1 - t0) * t) + n * h);
                 }
                 let pts: Vec<Point> = pts.into_iter().map(|x| x + n * d).collect();
-                (PairKind::EdgeTouch, a, ConvexShell::from_points(&pts).unwrap())
+                (
+                    PairKind::EdgeTouch,
+                    a,
+                    ConvexShell::from_points(&pts).unwrap(),
+                )
             });
-        let vertex = (shell_near(o), any::<prop::sample::Index>(), delta()).prop_map(
-            |(a, vi, d)| {
+        let vertex =
+            (shell_near(o), any::<prop::sample::Index>(), delta()).prop_map(|(a, vi, d)| {
                 let v = a.vertices();
                 let p = v[vi.index(v.len())];
                 let dir = unit(p - a.center().unwrap());
                 let pts: Vec<Point> = v.iter().map(|&x| p * 2.0 - x + dir * d).collect();
-                (PairKind::VertexTouch, a.clone(), ConvexShell::from_points(&pts).unwrap())
-            },
-        );
+                (
+                    PairKind::VertexTouch,
+                    a.clone(),
+                    ConvexShell::from_points(&pts).unwrap(),
+                )
+            });
         prop_oneof![random, nested, edge, vertex]
     })
 }
@@ -284,9 +291,10 @@ pub fn brute_intersects(a: &ConvexShell, b: &ConvexShell) -> bool {
         return false;
     }
     let (ea, eb) = (edges(a), edges(b));
-    ea.iter()
-        .any(|&(p1, p2)| eb.iter().any(|&(q1, q2)| segments_intersect(p1, p2, q1, q2)))
-        || point_in_polygon(b, a.vertices()[0])
+    ea.iter().any(|&(p1, p2)| {
+        eb.iter()
+            .any(|&(q1, q2)| segments_intersect(p1, p2, q1, q2))
+    }) || point_in_polygon(b, a.vertices()[0])
         || point_in_polygon(a, b.vertices()[0])
 }
 
