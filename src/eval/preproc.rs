@@ -1,0 +1,563 @@
+//! From ground-truth and tracker [`Record`]s to a [`SequenceData`]: TrackEval's checks and
+//! preprocessing (`mot_challenge_2d_box.py`, `mots_challenge.py`), then similarities.
+
+use super::error::{EvalError, Location, Problem, Side};
+use super::masks;
+use super::sequence::{Assigner, SequenceBuilder, SequenceData};
+use crate::io::{Record, Rle};
+use serde::{Deserialize, Serialize};
+
+const EPS: f64 = f64::EPSILON;
+
+/// MOTChallenge class ids (`mot_challenge_2d_box.py`): 1 pedestrian … 13 crowd.
+const MOT_PEDESTRIAN: i32 = 1;
+const MOT_DISTRACTORS: [i32; 4] = [2, 7, 8, 12];
+const MOT20_EXTRA_DISTRACTOR: i32 = 6;
+/// MOTS class of ignore regions.
+pub const MOTS_IGNORE_CLASS: i32 = 10;
+/// MOTS pedestrian class.
+pub const MOTS_PEDESTRIAN: i32 = 2;
+
+/// How records are filtered before scoring, as TrackEval's dataset classes do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Preprocessing {
+    /// Score every record as given (no filtering, no class checks).
+    None,
+    /// MOT15, or TrackEval with `DO_PREPROC` off: drop zero-marked gt rows (`int(conf) == 0`);
+    /// tracker rows must not have a class above 1.
+    Mot15,
+    /// MOT16/MOT17: additionally remove tracker boxes matched (IoU ≥ 0.5) to distractor gt
+    /// (person on vehicle, static person, distractor, reflection), keep only pedestrian gt, and
+    /// refuse gt classes outside 1..=13.
+    Mot17,
+    /// MOT20: as [`Preprocessing::Mot17`] with non-MOT vehicles also distractors.
+    Mot20,
+    /// MOTSChallenge: keep gt and tracker masks of `class` only; unmatched tracker masks more
+    /// than half inside the frame's class-10 ignore region are removed; masks must not overlap.
+    Mots {
+        /// Class evaluated (2 = pedestrian in MOTS20, 1 = car in KITTI-MOTS).
+        class: i32,
+    },
+}
+
+impl Preprocessing {
+    /// TrackEval's choice for a benchmark name: MOTS (or `masks`) → MOTS pedestrians, MOT15 →
+    /// zero-marked only, MOT20 → MOT20, anything else → MOT16/17 rules (as TrackEval treats
+    /// every benchmark other than MOT15).
+    pub fn for_benchmark(benchmark: &str, masks: bool) -> Preprocessing {
+        let b = benchmark.to_ascii_uppercase();
+        if masks || b.starts_with("MOTS") {
+            Preprocessing::Mots {
+                class: MOTS_PEDESTRIAN,
+            }
+        } else if b == "MOT15" {
+            Preprocessing::Mot15
+        } else if b == "MOT20" {
+            Preprocessing::Mot20
+        } else {
+            Preprocessing::Mot17
+        }
+    }
+}
+
+/// Which similarity scores a gt/tracker pair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Similarity {
+    /// Box IoU (`Record::bbox`), as TrackEval's `_calculate_box_ious`.
+    BoxIou,
+    /// Mask IoU (`Record::mask`), as pycocotools' `iou`.
+    MaskIou,
+}
+
+/// Evaluation settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EvalConfig {
+    /// Filtering before scoring.
+    pub preprocessing: Preprocessing,
+    /// Pair similarity.
+    pub similarity: Similarity,
+    /// Similarity a CLEAR or Identity match needs (TrackEval: 0.5).
+    pub threshold: f64,
+}
+
+impl Default for EvalConfig {
+    /// Box IoU, MOT15 preprocessing (zero-marked gt dropped), threshold 0.5.
+    fn default() -> Self {
+        EvalConfig {
+            preprocessing: Preprocessing::Mot15,
+            similarity: Similarity::BoxIou,
+            threshold: 0.5,
+        }
+    }
+}
+
+impl EvalConfig {
+    /// TrackEval's settings for a benchmark; `masks` selects MOTS with mask IoU.
+    pub fn for_benchmark(benchmark: &str, masks: bool) -> EvalConfig {
+        let preprocessing = Preprocessing::for_benchmark(benchmark, masks);
+        let similarity = if matches!(preprocessing, Preprocessing::Mots { .. }) {
+            Similarity::MaskIou
+        } else {
+            Similarity::BoxIou
+        };
+        EvalConfig {
+            preprocessing,
+            similarity,
+            threshold: 0.5,
+        }
+    }
+}
+
+/// Where a vector of records was read from, so errors can name the file and line.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Origin {
+    /// File name.
+    pub file: String,
+    /// `lines[i]`: 1-based line of record `i`.
+    pub lines: Vec<usize>,
+}
+
+/// One sequence to evaluate: ground truth and tracker records, frames `1..=num_frames`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct SequenceInput {
+    /// Sequence name.
+    pub name: String,
+    /// Number of frames (`seqLength`); records beyond are an error.
+    pub num_frames: u32,
+    /// Ground-truth records.
+    pub gt: Vec<Record>,
+    /// Tracker records.
+    pub results: Vec<Record>,
+    /// Where `gt` came from, if from a file.
+    pub gt_origin: Option<Origin>,
+    /// Where `results` came from, if from a file.
+    pub results_origin: Option<Origin>,
+}
+
+impl SequenceInput {
+    /// An in-memory sequence (errors name records by index).
+    pub fn new(
+        name: impl Into<String>,
+        num_frames: u32,
+        gt: Vec<Record>,
+        results: Vec<Record>,
+    ) -> SequenceInput {
+        SequenceInput {
+            name: name.into(),
+            num_frames,
+            gt,
+            results,
+            gt_origin: None,
+            results_origin: None,
+        }
+    }
+
+    fn records(&self, side: Side) -> &[Record] {
+        match side {
+            Side::Gt => &self.gt,
+            Side::Tracker => &self.results,
+        }
+    }
+
+    fn error(&self, side: Side, record: usize, problem: Problem) -> EvalError {
+        let origin = match side {
+            Side::Gt => self.gt_origin.as_ref(),
+            Side::Tracker => self.results_origin.as_ref(),
+        };
+        EvalError::Data {
+            location: Location {
+                seq: self.name.clone(),
+                side,
+                record,
+                file: origin.map(|o| o.file.clone()),
+                line: origin
+                    .and_then(|o| o.lines.get(record).copied())
+                    .unwrap_or(0),
+            },
+            problem,
+        }
+    }
+}
+
+/// Record indices grouped by frame (counting sort, record order kept within a frame).
+struct ByFrame {
+    start: Vec<usize>,
+    idx: Vec<usize>,
+}
+
+impl ByFrame {
+    fn new(records: &[Record], num_frames: usize) -> ByFrame {
+        let mut start = vec![0usize; num_frames + 2];
+        for r in records {
+            start[r.frame as usize + 1] += 1;
+        }
+        for f in 1..start.len() {
+            start[f] += start[f - 1];
+        }
+        let mut fill = start.clone();
+        let mut idx = vec![0usize; records.len()];
+        for (k, r) in records.iter().enumerate() {
+            let f = r.frame as usize;
+            idx[fill[f]] = k;
+            fill[f] += 1;
+        }
+        ByFrame { start, idx }
+    }
+
+    fn frame(&self, f: usize) -> &[usize] {
+        &self.idx[self.start[f]..self.start[f + 1]]
+    }
+}
+
+/// Applies TrackEval's checks and preprocessing and computes similarities.
+pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceData, EvalError> {
+    let n = input.num_frames as usize;
+    let mots_class = match config.preprocessing {
+        Preprocessing::Mots { class } => Some(class),
+        _ => None,
+    };
+    let need_masks = mots_class.is_some() || config.similarity == Similarity::MaskIou;
+
+    // Loading checks, in TrackEval's order: gt file, then tracker file.
+    let mut mask_size: Option<(u32, u32)> = None;
+    for side in [Side::Gt, Side::Tracker] {
+        for (k, r) in input.records(side).iter().enumerate() {
+            if r.frame < 1 || r.frame > input.num_frames {
+                return Err(input.error(
+                    side,
+                    k,
+                    Problem::InvalidTimestep {
+                        frame: r.frame,
+                        num_frames: input.num_frames,
+                    },
+                ));
+            }
+            if need_masks {
+                let Some(m) = &r.mask else {
+                    return Err(input.error(side, k, Problem::MissingMask { frame: r.frame }));
+                };
+                let (eh, ew) = *mask_size.get_or_insert((m.height, m.width));
+                if (m.height, m.width) != (eh, ew) {
+                    return Err(input.error(
+                        side,
+                        k,
+                        Problem::MaskSize {
+                            frame: r.frame,
+                            height: m.height,
+                            width: m.width,
+                            expected_height: eh,
+                            expected_width: ew,
+                        },
+                    ));
+                }
+            } else if ![r.bbox.x, r.bbox.y, r.bbox.w, r.bbox.h]
+                .iter()
+                .all(|v| v.is_finite())
+            {
+                return Err(input.error(side, k, Problem::InvalidBox { frame: r.frame }));
+            }
+        }
+    }
+    let gt_by = ByFrame::new(&input.gt, n);
+    let tr_by = ByFrame::new(&input.results, n);
+    let (mask_w, mask_h) = mask_size.map(|(h, w)| (w, h)).unwrap_or((0, 0));
+
+    // MOTS: masks of a frame must not overlap (gt objects and the merged ignore region count as
+    // one set, tracker masks as another).
+    if mots_class.is_some() {
+        let mut owners: Vec<usize> = Vec::new();
+        let mut ignore_idx: Vec<usize> = Vec::new();
+        for f in 1..=n {
+            for side in [Side::Gt, Side::Tracker] {
+                let recs = input.records(side);
+                let idx = match side {
+                    Side::Gt => gt_by.frame(f),
+                    Side::Tracker => tr_by.frame(f),
+                };
+                owners.clear();
+                ignore_idx.clear();
+                for &k in idx {
+                    if side == Side::Gt && recs[k].class == MOTS_IGNORE_CLASS {
+                        ignore_idx.push(k);
+                    } else {
+                        owners.push(k);
+                    }
+                }
+                let merged = (!ignore_idx.is_empty()).then(|| {
+                    let parts: Vec<&Rle> = ignore_idx
+                        .iter()
+                        .filter_map(|&k| recs[k].mask.as_ref())
+                        .collect();
+                    masks::union(&parts, mask_w, mask_h)
+                });
+                let mut ms: Vec<&Rle> = owners
+                    .iter()
+                    .filter_map(|&k| recs[k].mask.as_ref())
+                    .collect();
+                if let (Some(m), Some(&k)) = (&merged, ignore_idx.first()) {
+                    ms.push(m);
+                    owners.push(k);
+                }
+                if let Some(p) = masks::first_overlap(&ms) {
+                    return Err(input.error(
+                        side,
+                        owners[p],
+                        Problem::OverlappingMasks { frame: f as u32 },
+                    ));
+                }
+            }
+        }
+    }
+
+    // Ids must be unique per frame (TrackEval checks tracker before gt, frame by frame). MOTS
+    // ignore regions are not objects and may share ids.
+    let mut scratch: Vec<(i64, usize)> = Vec::new();
+    for f in 1..=n {
+        for side in [Side::Tracker, Side::Gt] {
+            let recs = input.records(side);
+            let idx = match side {
+                Side::Gt => gt_by.frame(f),
+                Side::Tracker => tr_by.frame(f),
+            };
+            scratch.clear();
+            scratch.extend(
+                idx.iter()
+                    .filter(|&&k| {
+                        !(side == Side::Gt
+                            && mots_class.is_some()
+                            && recs[k].class == MOTS_IGNORE_CLASS)
+                    })
+                    .map(|&k| (recs[k].id, k)),
+            );
+            if scratch.len() > 1 {
+                scratch.sort_unstable();
+                if let Some(w) = scratch.windows(2).find(|w| w[0].0 == w[1].0) {
+                    return Err(input.error(
+                        side,
+                        w[1].1,
+                        Problem::DuplicateId {
+                            frame: f as u32,
+                            id: w[0].0,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+
+    let mut p = FramePrep::default();
+    let mut builder = SequenceBuilder::new(input.name.clone());
+    for f in 1..=n {
+        p.frame(
+            input,
+            config,
+            f,
+            gt_by.frame(f),
+            tr_by.frame(f),
+            (mask_w, mask_h),
+        )?;
+        builder.push_frame(&p.gt_ids, &p.tr_ids, &p.sim)?;
+    }
+    Ok(builder.finish())
+}
+
+/// Per-frame buffers, reused across frames.
+#[derive(Default)]
+struct FramePrep {
+    gt_rows: Vec<usize>,
+    tr_cols: Vec<usize>,
+    raw: Vec<f64>,
+    keep_gt: Vec<bool>,
+    keep_tr: Vec<bool>,
+    gt_ids: Vec<i64>,
+    tr_ids: Vec<i64>,
+    sim: Vec<f64>,
+    assign: Assigner,
+    ignore: Vec<usize>,
+    matched: Vec<bool>,
+}
+
+impl FramePrep {
+    fn frame(
+        &mut self,
+        input: &SequenceInput,
+        config: &EvalConfig,
+        f: usize,
+        gt_idx: &[usize],
+        tr_idx: &[usize],
+        (mask_w, mask_h): (u32, u32),
+    ) -> Result<(), EvalError> {
+        let (gt, tr) = (&input.gt, &input.results);
+        let frame = f as u32;
+        self.gt_rows.clear();
+        self.tr_cols.clear();
+        self.ignore.clear();
+        let mots_class = match config.preprocessing {
+            Preprocessing::Mots { class } => Some(class),
+            _ => None,
+        };
+        // Candidate rows/columns: MOTS filters by class before matching; MOTChallenge matches
+        // against every gt class (distractors included).
+        for &k in gt_idx {
+            match mots_class {
+                Some(_) if gt[k].class == MOTS_IGNORE_CLASS => self.ignore.push(k),
+                Some(c) if gt[k].class != c => {}
+                _ => self.gt_rows.push(k),
+            }
+        }
+        for &k in tr_idx {
+            match mots_class {
+                Some(c) if tr[k].class != c => {}
+                _ => self.tr_cols.push(k),
+            }
+        }
+        let (ng, nt) = (self.gt_rows.len(), self.tr_cols.len());
+        self.raw.clear();
+        for &gk in &self.gt_rows {
+            for &tk in &self.tr_cols {
+                self.raw
+                    .push(similarity(&gt[gk], &tr[tk], config.similarity));
+            }
+        }
+        self.keep_gt.clear();
+        self.keep_gt.resize(ng, true);
+        self.keep_tr.clear();
+        self.keep_tr.resize(nt, true);
+
+        match config.preprocessing {
+            Preprocessing::None => {}
+            Preprocessing::Mot15 | Preprocessing::Mot17 | Preprocessing::Mot20 => {
+                if let Some(&k) = self.tr_cols.iter().find(|&&k| tr[k].class > 1) {
+                    return Err(input.error(
+                        Side::Tracker,
+                        k,
+                        Problem::NonPedestrianClass {
+                            frame,
+                            class: tr[k].class,
+                        },
+                    ));
+                }
+                let full = config.preprocessing != Preprocessing::Mot15;
+                if full && ng > 0 && nt > 0 {
+                    if let Some(&k) = self
+                        .gt_rows
+                        .iter()
+                        .find(|&&k| !(1..=13).contains(&gt[k].class))
+                    {
+                        return Err(input.error(
+                            Side::Gt,
+                            k,
+                            Problem::InvalidGtClass {
+                                frame,
+                                class: gt[k].class,
+                            },
+                        ));
+                    }
+                    let cost = self.assign.reset(ng, nt);
+                    for (c, &v) in cost.iter_mut().zip(&self.raw) {
+                        *c = if v < 0.5 - EPS { 0.0 } else { -v };
+                    }
+                    self.solve(input, ng, nt)?;
+                    let mot20 = config.preprocessing == Preprocessing::Mot20;
+                    for (&i, &j) in self.assign.rows.iter().zip(&self.assign.cols) {
+                        let v = self.raw[i * nt + j];
+                        let score = if v < 0.5 - EPS { 0.0 } else { v };
+                        let class = gt[self.gt_rows[i]].class;
+                        let distractor = MOT_DISTRACTORS.contains(&class)
+                            || (mot20 && class == MOT20_EXTRA_DISTRACTOR);
+                        if score > EPS && distractor {
+                            self.keep_tr[j] = false;
+                        }
+                    }
+                }
+                for (i, &k) in self.gt_rows.iter().enumerate() {
+                    // TrackEval reads the flag with `astype(int)`: 0.5 counts as zero-marked.
+                    let marked = gt[k].score.trunc() != 0.0;
+                    self.keep_gt[i] = marked && (!full || gt[k].class == MOT_PEDESTRIAN);
+                }
+            }
+            Preprocessing::Mots { .. } => {
+                if nt > 0 {
+                    let cost = self.assign.reset(ng, nt);
+                    for (c, &v) in cost.iter_mut().zip(&self.raw) {
+                        *c = if v < 0.5 - EPS { 10000.0 } else { -v };
+                    }
+                    self.solve(input, ng, nt)?;
+                    self.matched.clear();
+                    self.matched.resize(nt, false);
+                    for (&i, &j) in self.assign.rows.iter().zip(&self.assign.cols) {
+                        if -self.assign.cost()[i * nt + j] > EPS {
+                            self.matched[j] = true;
+                        }
+                    }
+                    // Unmatched tracker masks more than half inside the ignore region go.
+                    if !self.ignore.is_empty() {
+                        let parts: Vec<&Rle> = self
+                            .ignore
+                            .iter()
+                            .filter_map(|&k| gt[k].mask.as_ref())
+                            .collect();
+                        let region = masks::union(&parts, mask_w, mask_h);
+                        for (j, &k) in self.tr_cols.iter().enumerate() {
+                            if self.matched[j] {
+                                continue;
+                            }
+                            if let Some(m) = &tr[k].mask {
+                                if masks::ioa(m, &region) > 0.5 + EPS {
+                                    self.keep_tr[j] = false;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+
+        self.gt_ids.clear();
+        self.tr_ids.clear();
+        self.sim.clear();
+        for (i, &k) in self.gt_rows.iter().enumerate() {
+            if self.keep_gt[i] {
+                self.gt_ids.push(gt[k].id);
+            }
+        }
+        for (j, &k) in self.tr_cols.iter().enumerate() {
+            if self.keep_tr[j] {
+                self.tr_ids.push(tr[k].id);
+            }
+        }
+        for i in 0..ng {
+            if !self.keep_gt[i] {
+                continue;
+            }
+            for j in 0..nt {
+                if self.keep_tr[j] {
+                    self.sim.push(self.raw[i * nt + j]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn solve(&mut self, input: &SequenceInput, ng: usize, nt: usize) -> Result<(), EvalError> {
+        if self.assign.solve(ng, nt) {
+            Ok(())
+        } else {
+            Err(EvalError::Assignment {
+                seq: input.name.clone(),
+                rows: ng,
+                cols: nt,
+            })
+        }
+    }
+}
+
+fn similarity(gt: &Record, tr: &Record, kind: Similarity) -> f64 {
+    match kind {
+        Similarity::BoxIou => gt.bbox.iou(&tr.bbox),
+        Similarity::MaskIou => match (&gt.mask, &tr.mask) {
+            (Some(a), Some(b)) => a.iou(b),
+            _ => 0.0,
+        },
+    }
+}
