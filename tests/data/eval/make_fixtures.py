@@ -17,6 +17,10 @@ Cases:
   mot20  the same data under MOT20 rules (class 6, non-MOT vehicle, becomes a distractor).
   mots   MOTSChallenge: RLE masks from numpy + pycocotools, cars (class 1) filtered out,
          class-10 ignore regions that swallow unmatched tracker masks.
+  nonmonotone  MOT15 rules: two pairs of sequences showing that TrackEval's recall is not
+         monotone in the tracker's rows: removing one row raises CLEAR recall (clear-removed vs
+         clear-full, via IDSW-avoiding matching) and DetRe (hota-removed vs hota-full, via the
+         global alignment score).
   edge   MOT15 rules: an empty tracker, gt with empty frames, no gt at all, ids that appear,
          vanish and come back, and a sequence with nothing in it.
 Seeds are fixed, so the output is reproducible. Needs TrackEval, numpy and pycocotools.
@@ -285,7 +289,29 @@ def edge_case():
     save_expected(root, run_trackeval(root, "MOT15", False))
 
 
+def nonmonotone_case():
+    def row(f, i, x):
+        return "%d,%d,%s,0,10,10,1,-1,-1,-1" % (f, i, x)
+    # CLEAR: frame 1 matches g1-T (IoU .905) over V (.538); in frame 2 the continuation g1-T
+    # (1000.905) beats g1-U + g2-T (1.44), one match. Without T in frame 1, g1 continues with V,
+    # which is absent in frame 2, so both gts match: recall rises.
+    clear_gt = [row(1, 1, "0"), row(2, 1, "0"), row(2, 2, "1")]
+    clear_tr = [row(1, 1, "0.5"), row(1, 2, "-3"), row(2, 1, "0.5"), row(2, 3, "-3")]
+    # HOTA: g1 and T coincide for 4 frames, so their alignment is high; in frame 5 the weak
+    # g1-T (IoU .33) beats g1-U (IoU .67) because U's alignment is low. Without T in frame 5,
+    # g1-U matches and DetRe rises.
+    hota_gt = [row(f, 1, "0") for f in range(1, 6)]
+    hota_tr = [row(f, 1, "0") for f in range(1, 5)] + [row(5, 1, "5"), row(5, 2, "2")]
+    seqs = {"clear-full": (2, clear_gt, clear_tr),
+            "clear-removed": (2, clear_gt, clear_tr[1:]),
+            "hota-full": (5, hota_gt, hota_tr),
+            "hota-removed": (5, hota_gt, hota_tr[:4] + hota_tr[5:])}
+    root = layout("nonmonotone", "MOT15", seqs)
+    save_expected(root, run_trackeval(root, "MOT15", False))
+
+
 if __name__ == "__main__":
+    nonmonotone_case()
     mot17_cases()
     mots_case()
     edge_case()
