@@ -258,3 +258,38 @@ pub(crate) fn clear_with(
     res.finalize();
     Ok(res)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::SequenceBuilder;
+
+    #[test]
+    fn counts_switches_and_fragments_as_trackeval() {
+        // One gt id; tracker: id 10, gap (no tracker object), id 10, then id 11.
+        let mut b = SequenceBuilder::new("s");
+        b.push_frame(&[1], &[10], &[0.9]).unwrap();
+        b.push_frame(&[1], &[], &[]).unwrap();
+        b.push_frame(&[1], &[10], &[0.8]).unwrap();
+        b.push_frame(&[1], &[11], &[0.7]).unwrap();
+        b.push_frame(&[1], &[11], &[0.2]).unwrap();
+        b.push_frame(&[1], &[11], &[0.6]).unwrap();
+        let c = clear(&b.finish(), 0.5).unwrap();
+        assert_eq!((c.clr_tp, c.clr_fn, c.clr_fp), (4, 2, 1));
+        assert_eq!(c.idsw, 1);
+        // A frame without tracker objects does not break the track (TrackEval keeps the
+        // previous-timestep state); the unmatched frame 5 does: one fragmentation.
+        assert_eq!(c.frag, 1);
+        assert_eq!((c.mt, c.pt, c.ml), (0, 1, 0));
+        assert!((c.motp - (0.9 + 0.8 + 0.7 + 0.6) / 4.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn empty_gt_leaves_mota_zero() {
+        let mut b = SequenceBuilder::new("s");
+        b.push_frame(&[], &[1, 2], &[]).unwrap();
+        let c = clear(&b.finish(), 0.5).unwrap();
+        // TrackEval returns before computing MOTA (which would be -FP).
+        assert_eq!((c.clr_fp, c.mota, c.mlr, c.clr_frames), (2, 0.0, 1.0, 0));
+    }
+}

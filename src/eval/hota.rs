@@ -110,7 +110,6 @@ impl Hota {
     /// Combines sequences: summed counts, AssA/AssRe/AssPr and LocA weighted by HOTA_TP.
     pub fn combine<'a>(all: impl IntoIterator<Item = &'a Hota> + Clone) -> Hota {
         let mut c = Hota::default();
-        let mut loca_weighted = [0.0; NUM_ALPHAS];
         for r in all.clone() {
             for a in 0..NUM_ALPHAS {
                 c.hota_tp[a] += r.hota_tp[a];
@@ -124,7 +123,8 @@ impl Hota {
                 c.ass_re[a] += r.ass_re[a] * w;
                 c.ass_pr[a] += r.ass_pr[a] * w;
                 c.ass_a[a] += r.ass_a[a] * w;
-                loca_weighted[a] += r.loc_a[a] * w;
+                // Weighted LocA sum, divided below.
+                c.loc_a[a] += r.loc_a[a] * w;
             }
         }
         for a in 0..NUM_ALPHAS {
@@ -132,7 +132,7 @@ impl Hota {
             c.ass_re[a] /= tp.max(1.0);
             c.ass_pr[a] /= tp.max(1.0);
             c.ass_a[a] /= tp.max(1.0);
-            c.loc_a[a] = loca_weighted[a].max(1e-10) / tp.max(1e-10);
+            c.loc_a[a] = c.loc_a[a].max(1e-10) / tp.max(1e-10);
         }
         c.finalize();
         c

@@ -561,3 +561,120 @@ fn similarity(gt: &Record, tr: &Record, kind: Similarity) -> f64 {
         },
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::BBox;
+
+    fn rec(frame: u32, id: i64, x: f64, score: f64, class: i32) -> Record {
+        Record {
+            score,
+            class,
+            ..Record::from_box(frame, id, BBox::new(x, 0.0, 10.0, 10.0))
+        }
+    }
+
+    fn cfg(p: Preprocessing) -> EvalConfig {
+        EvalConfig {
+            preprocessing: p,
+            ..EvalConfig::default()
+        }
+    }
+
+    #[test]
+    fn zero_marked_uses_integer_truncation() {
+        // conf 0.5 reads as 0 in TrackEval (astype(int)), so that row is dropped; -1.5 is kept.
+        let gt = vec![
+            rec(1, 1, 0.0, 0.5, 1),
+            rec(1, 2, 50.0, -1.5, 1),
+            rec(1, 3, 90.0, 1.0, 1),
+        ];
+        let input = SequenceInput::new("z", 1, gt, vec![]);
+        let s = prepare(&input, &cfg(Preprocessing::Mot15)).unwrap();
+        assert_eq!(s.num_gt_dets(), 2);
+        let s = prepare(&input, &cfg(Preprocessing::None)).unwrap();
+        assert_eq!(s.num_gt_dets(), 3);
+    }
+
+    #[test]
+    fn mot17_removes_tracker_boxes_on_distractors_only() {
+        // gt: pedestrian at x=0, static person (7) at x=50, car (3) at x=100.
+        let gt = vec![
+            rec(1, 1, 0.0, 1.0, 1),
+            rec(1, 2, 50.0, 1.0, 7),
+            rec(1, 3, 100.0, 1.0, 3),
+        ];
+        let tr = vec![
+            rec(1, 1, 1.0, 1.0, -1),
+            rec(1, 2, 51.0, 1.0, -1),
+            rec(1, 3, 101.0, 1.0, 1),
+        ];
+        let input = SequenceInput::new("d", 1, gt, tr);
+        let s = prepare(&input, &cfg(Preprocessing::Mot17)).unwrap();
+        // Only the pedestrian gt stays; the box on the static person goes, the one on the car
+        // stays (a false positive).
+        assert_eq!((s.num_gt_dets(), s.num_tracker_dets()), (1, 2));
+        let s = prepare(&input, &cfg(Preprocessing::Mot15)).unwrap();
+        assert_eq!((s.num_gt_dets(), s.num_tracker_dets()), (3, 3));
+    }
+
+    #[test]
+    fn mot20_adds_non_mot_vehicle_distractor() {
+        let gt = vec![rec(1, 1, 0.0, 1.0, 6)];
+        let tr = vec![rec(1, 1, 1.0, 1.0, -1)];
+        let input = SequenceInput::new("v", 1, gt, tr);
+        assert_eq!(
+            prepare(&input, &cfg(Preprocessing::Mot17))
+                .unwrap()
+                .num_tracker_dets(),
+            1
+        );
+        assert_eq!(
+            prepare(&input, &cfg(Preprocessing::Mot20))
+                .unwrap()
+                .num_tracker_dets(),
+            0
+        );
+    }
+
+    fn mask(w: u32, h: u32, x0: usize, x1: usize) -> Rle {
+        let mut m = vec![0u8; (w * h) as usize];
+        for y in 0..h as usize {
+            for x in x0..x1 {
+                m[y * w as usize + x] = 1;
+            }
+        }
+        Rle::encode(w, h, &m).unwrap()
+    }
+
+    fn mrec(id: i64, class: i32, m: Rle) -> Record {
+        Record {
+            class,
+            mask: Some(m),
+            ..Record::from_box(1, id, BBox::default())
+        }
+    }
+
+    #[test]
+    fn mots_ignore_region_removes_unmatched_masks_inside_it() {
+        // 10x2 image: pedestrian at x 0..3, ignore region at x 6..10, a car at x 3..5.
+        let gt = vec![
+            mrec(2001, 2, mask(10, 2, 0, 3)),
+            mrec(1001, 1, mask(10, 2, 3, 5)),
+            mrec(10000, 10, mask(10, 2, 6, 10)),
+        ];
+        let tr = vec![
+            mrec(1, 2, mask(10, 2, 0, 3)),  // matches the pedestrian
+            mrec(2, 2, mask(10, 2, 5, 9)),  // 3/4 inside the ignore region: removed
+            mrec(3, 2, mask(10, 2, 3, 5)),  // on the car (not evaluated): a false positive
+            mrec(4, 1, mask(10, 2, 9, 10)), // a car: filtered out by class
+        ];
+        let input = SequenceInput::new("m", 1, gt, tr);
+        let c = EvalConfig::for_benchmark("MOTS", true);
+        let s = prepare(&input, &c).unwrap();
+        assert_eq!((s.num_gt_dets(), s.num_tracker_dets()), (1, 2));
+        let f = s.frame(0).unwrap();
+        assert_eq!(f.similarity, &[1.0, 0.0]);
+    }
+}
