@@ -179,33 +179,53 @@ impl SequenceInput {
     }
 }
 
-/// Record indices grouped by frame (counting sort, record order kept within a frame).
+/// Record indices grouped by frame, for the frames that have records (order kept in a frame).
 struct ByFrame {
-    start: Vec<usize>,
-    idx: Vec<usize>,
+    frames: Vec<u32>,
+    gt_idx: Vec<usize>,
+    tr_idx: Vec<usize>,
+    gt: Vec<(usize, usize)>,
+    tr: Vec<(usize, usize)>,
 }
 
 impl ByFrame {
-    fn new(records: &[Record], num_frames: usize) -> ByFrame {
-        let mut start = vec![0usize; num_frames + 2];
-        for r in records {
-            start[r.frame as usize + 1] += 1;
+    fn new(gt: &[Record], tr: &[Record]) -> ByFrame {
+        let order = |rs: &[Record]| {
+            let mut v: Vec<usize> = (0..rs.len()).collect();
+            v.sort_by_key(|&k| rs[k].frame);
+            v
+        };
+        let (gt_idx, tr_idx) = (order(gt), order(tr));
+        let mut frames: Vec<u32> = gt.iter().chain(tr).map(|r| r.frame).collect();
+        frames.sort_unstable();
+        frames.dedup();
+        let ranges = |rs: &[Record], idx: &[usize]| {
+            let mut out = Vec::with_capacity(frames.len());
+            let mut pos = 0;
+            for &f in &frames {
+                let start = pos;
+                while pos < idx.len() && rs[idx[pos]].frame == f {
+                    pos += 1;
+                }
+                out.push((start, pos));
+            }
+            out
+        };
+        let (g, t) = (ranges(gt, &gt_idx), ranges(tr, &tr_idx));
+        ByFrame {
+            frames,
+            gt_idx,
+            tr_idx,
+            gt: g,
+            tr: t,
         }
-        for f in 1..start.len() {
-            start[f] += start[f - 1];
-        }
-        let mut fill = start.clone();
-        let mut idx = vec![0usize; records.len()];
-        for (k, r) in records.iter().enumerate() {
-            let f = r.frame as usize;
-            idx[fill[f]] = k;
-            fill[f] += 1;
-        }
-        ByFrame { start, idx }
     }
 
-    fn frame(&self, f: usize) -> &[usize] {
-        &self.idx[self.start[f]..self.start[f + 1]]
+    fn side(&self, side: Side, i: usize) -> &[usize] {
+        match side {
+            Side::Gt => &self.gt_idx[self.gt[i].0..self.gt[i].1],
+            Side::Tracker => &self.tr_idx[self.tr[i].0..self.tr[i].1],
+        }
     }
 }
 
@@ -258,8 +278,7 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
             }
         }
     }
-    let gt_by = ByFrame::new(&input.gt, n);
-    let tr_by = ByFrame::new(&input.results, n);
+    let by = ByFrame::new(&input.gt, &input.results);
     let (mask_w, mask_h) = mask_size.map(|(h, w)| (w, h)).unwrap_or((0, 0));
 
     // MOTS: masks of a frame must not overlap (gt objects and the merged ignore region count as
@@ -267,13 +286,10 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
     if mots_class.is_some() {
         let mut owners: Vec<usize> = Vec::new();
         let mut ignore_idx: Vec<usize> = Vec::new();
-        for f in 1..=n {
+        for (i, &f) in by.frames.iter().enumerate() {
             for side in [Side::Gt, Side::Tracker] {
                 let recs = input.records(side);
-                let idx = match side {
-                    Side::Gt => gt_by.frame(f),
-                    Side::Tracker => tr_by.frame(f),
-                };
+                let idx = by.side(side, i);
                 owners.clear();
                 ignore_idx.clear();
                 for &k in idx {
@@ -302,7 +318,7 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
                     return Err(input.error(
                         side,
                         owners[p],
-                        Problem::OverlappingMasks { frame: f as u32 },
+                        Problem::OverlappingMasks { frame: f },
                     ));
                 }
             }
@@ -312,13 +328,10 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
     // Ids must be unique per frame (TrackEval checks tracker before gt, frame by frame). MOTS
     // ignore regions are not objects and may share ids.
     let mut scratch: Vec<(i64, usize)> = Vec::new();
-    for f in 1..=n {
+    for (i, &f) in by.frames.iter().enumerate() {
         for side in [Side::Tracker, Side::Gt] {
             let recs = input.records(side);
-            let idx = match side {
-                Side::Gt => gt_by.frame(f),
-                Side::Tracker => tr_by.frame(f),
-            };
+            let idx = by.side(side, i);
             scratch.clear();
             scratch.extend(
                 idx.iter()
@@ -336,7 +349,7 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
                         side,
                         w[1].1,
                         Problem::DuplicateId {
-                            frame: f as u32,
+                            frame: f,
                             id: w[0].0,
                         },
                     ));
@@ -347,17 +360,22 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
 
     let mut p = FramePrep::default();
     let mut builder = SequenceBuilder::new(input.name.clone());
-    for f in 1..=n {
+    let mut done = 0usize;
+    for (i, &f) in by.frames.iter().enumerate() {
+        let f = f as usize;
+        builder.push_empty_frames(f - 1 - done);
         p.frame(
             input,
             config,
             f,
-            gt_by.frame(f),
-            tr_by.frame(f),
+            by.side(Side::Gt, i),
+            by.side(Side::Tracker, i),
             (mask_w, mask_h),
         )?;
         builder.push_frame(&p.gt_ids, &p.tr_ids, &p.sim)?;
+        done = f;
     }
+    builder.push_empty_frames(n - done);
     Ok(builder.finish())
 }
 
@@ -676,5 +694,15 @@ mod tests {
         assert_eq!((s.num_gt_dets(), s.num_tracker_dets()), (1, 2));
         let f = s.frame(0).unwrap();
         assert_eq!(f.similarity, &[1.0, 0.0]);
+    }
+
+    #[test]
+    fn huge_seq_length_costs_nothing() {
+        // Only frames with objects are stored; CLR_Frames still counts every timestep.
+        let gt = vec![rec(1, 1, 0.0, 1.0, 1), rec(u32::MAX, 1, 0.0, 1.0, 1)];
+        let input = SequenceInput::new("h", u32::MAX, gt.clone(), gt);
+        let r = crate::eval::evaluate(&[input], &EvalConfig::default()).unwrap();
+        assert_eq!(r.combined.clear.clr_frames, u32::MAX as u64);
+        assert_eq!(r.combined.clear.clr_tp, 2);
     }
 }

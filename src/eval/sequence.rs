@@ -8,6 +8,8 @@ use super::error::{EvalError, Side};
 
 #[derive(Debug, Clone, Copy)]
 struct Span {
+    /// 0-based timestep.
+    t: usize,
     gt: usize,
     num_gt: usize,
     tracker: usize,
@@ -16,9 +18,13 @@ struct Span {
 }
 
 /// One sequence ready for the metrics: ids are dense (`0..num_gt_ids`, `0..num_tracker_ids`).
+///
+/// Only frames with at least one object are stored, so a huge `seqLength` costs nothing; no
+/// metric does anything in a frame without objects.
 #[derive(Debug, Clone)]
 pub struct SequenceData {
     name: String,
+    num_frames: usize,
     num_gt_ids: usize,
     num_tracker_ids: usize,
     gt_ids: Vec<u32>,
@@ -54,7 +60,7 @@ impl SequenceData {
 
     /// Number of frames (timesteps), including empty ones.
     pub fn num_frames(&self) -> usize {
-        self.frames.len()
+        self.num_frames
     }
 
     /// Number of distinct ground-truth ids.
@@ -77,13 +83,22 @@ impl SequenceData {
         self.tracker_ids.len()
     }
 
-    /// Frame `t` (0-based).
+    /// Frame `t` (0-based); `None` past the end, an empty view for a frame without objects.
     pub fn frame(&self, t: usize) -> Option<FrameView<'_>> {
-        let s = self.frames.get(t)?;
-        Some(self.view(s))
+        if t >= self.num_frames {
+            return None;
+        }
+        Some(match self.frames.binary_search_by_key(&t, |s| s.t) {
+            Ok(k) => self.view(&self.frames[k]),
+            Err(_) => FrameView {
+                gt_ids: &[],
+                tracker_ids: &[],
+                similarity: &[],
+            },
+        })
     }
 
-    /// All frames in order.
+    /// The frames that have objects, in time order (frames without objects are skipped).
     pub fn frames(&self) -> impl Iterator<Item = FrameView<'_>> + '_ {
         self.frames.iter().map(|s| self.view(s))
     }
@@ -101,6 +116,7 @@ impl SequenceData {
 #[derive(Debug, Clone)]
 pub struct SequenceBuilder {
     name: String,
+    num_frames: usize,
     gt_ids: Vec<i64>,
     tracker_ids: Vec<i64>,
     sim: Vec<f64>,
@@ -113,6 +129,7 @@ impl SequenceBuilder {
     pub fn new(name: impl Into<String>) -> Self {
         SequenceBuilder {
             name: name.into(),
+            num_frames: 0,
             gt_ids: Vec::new(),
             tracker_ids: Vec::new(),
             sim: Vec::new(),
@@ -129,7 +146,7 @@ impl SequenceBuilder {
         tracker_ids: &[i64],
         similarity: &[f64],
     ) -> Result<(), EvalError> {
-        let frame = self.frames.len() + 1;
+        let frame = self.num_frames + 1;
         if similarity.len() != gt_ids.len() * tracker_ids.len() {
             return Err(EvalError::SimilarityShape {
                 seq: self.name.clone(),
@@ -160,7 +177,12 @@ impl SequenceBuilder {
                 });
             }
         }
+        self.num_frames += 1;
+        if gt_ids.is_empty() && tracker_ids.is_empty() {
+            return Ok(());
+        }
         self.frames.push(Span {
+            t: frame - 1,
             gt: self.gt_ids.len(),
             num_gt: gt_ids.len(),
             tracker: self.tracker_ids.len(),
@@ -173,12 +195,18 @@ impl SequenceBuilder {
         Ok(())
     }
 
+    /// Appends `count` frames without objects.
+    pub fn push_empty_frames(&mut self, count: usize) {
+        self.num_frames += count;
+    }
+
     /// Relabels ids densely (ascending original order) and returns the sequence.
     pub fn finish(self) -> SequenceData {
         let (gt_ids, num_gt_ids) = relabel(&self.gt_ids);
         let (tracker_ids, num_tracker_ids) = relabel(&self.tracker_ids);
         SequenceData {
             name: self.name,
+            num_frames: self.num_frames,
             num_gt_ids,
             num_tracker_ids,
             gt_ids,
@@ -272,6 +300,9 @@ mod tests {
         let f2 = s.frame(2).unwrap();
         assert_eq!(f2.tracker_ids, &[0, 1]);
         assert_eq!(s.num_gt_dets(), 3);
+        assert!(s.frame(1).unwrap().gt_ids.is_empty());
+        assert!(s.frame(3).is_none());
+        assert_eq!(s.frames().count(), 2);
     }
 
     #[test]
