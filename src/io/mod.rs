@@ -6,6 +6,7 @@
 //! what was expected. Readers are strict except where MOTChallenge itself is lenient: trailing
 //! fields, CRLF line ends, blank lines, comma or whitespace separators.
 
+pub mod layout;
 pub mod motchallenge;
 pub mod rle;
 
