@@ -1,1 +1,3 @@
 //! eval (work in progress).
+
+pub mod vot;
