@@ -326,9 +326,18 @@ mod exact {
         bounds: Option<(f64, f64)>,
     ) -> (f64, f64, f64) {
         let mut xs: Vec<f64> = a.iter().chain(b).flat_map(|s| [s.x0, s.x1]).collect();
-        if let Some((w, _)) = bounds {
+        if let Some((w, h)) = bounds {
             xs.push(0.0);
             xs.push(w);
+            // Clipping intervals to [0, h] bends their length where an edge crosses the top or
+            // bottom of the image: those abscissae are events too.
+            for s in a.iter().chain(b) {
+                for yc in [0.0, h] {
+                    if (s.y0 - yc) * (s.y1 - yc) < 0.0 {
+                        xs.push(s.x0 + (yc - s.y0) * (s.x1 - s.x0) / (s.y1 - s.y0));
+                    }
+                }
+            }
         }
         let mut cross = |s: &[Seg], t: &[Seg], same: bool| {
             for (i, p) in s.iter().enumerate() {
