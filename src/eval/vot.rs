@@ -449,6 +449,7 @@ mod toolkit {
                 }
                 Shape::Rect(d.map(f64::round_ties_even))
             }
+            Region::Polygon(p) if p.len() < 3 => Shape::Empty,
             Region::Polygon(p) => {
                 if !p.iter().all(|q| finite(q.x) && finite(q.y)) {
                     return None;

@@ -28,6 +28,10 @@ const MAX_POLYGON_STEPS: u64 = 1 << 24;
 /// Largest image side we accept, as the MOTS reader does.
 const MAX_SIDE: u32 = 1 << 16;
 
+/// Largest image (pixels) we decode masks for: 64 Mpx, far above any video frame, low enough
+/// that a hostile size cannot make us allocate gigabytes.
+const MAX_PIXELS: u64 = 1 << 26;
+
 /// One video of a COCO-video file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VideoInfo {
@@ -333,7 +337,12 @@ enum Segmentation {
 
 fn video_from_raw(ctx: &Ctx, raw: &RawValue) -> Result<VideoInfo, IoError> {
     let v: VideoRaw = ctx.parse(raw)?;
-    if v.width == 0 || v.height == 0 || v.width > MAX_SIDE || v.height > MAX_SIDE {
+    if v.width == 0
+        || v.height == 0
+        || v.width > MAX_SIDE
+        || v.height > MAX_SIDE
+        || v.width as u64 * v.height as u64 > MAX_PIXELS
+    {
         return Err(ctx.err_at(
             raw,
             format!(
@@ -385,7 +394,7 @@ fn segmentation_rle(ctx: &Ctx, raw: &RawValue, size: Option<(u32, u32)>) -> Resu
                     ));
                 }
             }
-            if h > MAX_SIDE || w > MAX_SIDE {
+            if h > MAX_SIDE || w > MAX_SIDE || h as u64 * w as u64 > MAX_PIXELS {
                 return Err(ctx.err_at(raw, format!("RLE size [{h}, {w}] is too large")));
             }
             match counts {

@@ -36,6 +36,10 @@ use std::fmt::Write as _;
 /// from exhausting the stack when the tree is dropped.
 const MAX_DEPTH: usize = 64;
 
+/// Largest frame number / task size accepted (about 9 hours at 30 fps): gaps are filled frame
+/// by frame, so an absurd frame number must not turn into billions of records.
+const MAX_FRAMES: u32 = 1 << 20;
+
 /// Task information of a CVAT file.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct CvatMeta {
@@ -281,6 +285,12 @@ fn parse_meta(ctx: &Ctx, root: &Node) -> Result<(CvatMeta, Vec<String>), IoError
     }
     if let Some(n) = task.child("size") {
         meta.size = ctx.text_uint(n)?;
+        if meta.size > MAX_FRAMES {
+            return Err(ctx.err(
+                n.pos,
+                format!("task size {} is larger than {MAX_FRAMES}", meta.size),
+            ));
+        }
     }
     if let Some(o) = task.child("original_size") {
         for (key, slot) in [("width", &mut meta.width), ("height", &mut meta.height)] {
@@ -289,8 +299,15 @@ fn parse_meta(ctx: &Ctx, root: &Node) -> Result<(CvatMeta, Vec<String>), IoError
                 .ok_or_else(|| ctx.err(o.pos, format!("<original_size> has no <{key}>")))?;
             *slot = ctx.text_uint(n)?;
         }
-        if meta.width > 1 << 16 || meta.height > 1 << 16 {
-            return Err(ctx.err(o.pos, "original size is larger than 65536"));
+        // 64 Mpx at most: masks are decoded to full frames.
+        if meta.width > 1 << 16
+            || meta.height > 1 << 16
+            || meta.width as u64 * meta.height as u64 > 1 << 26
+        {
+            return Err(ctx.err(
+                o.pos,
+                "original size is larger than 65536 per side or 64 Mpx",
+            ));
         }
     }
     if let Some(ls) = task.child("labels") {
@@ -404,8 +421,12 @@ fn parse_shape(ctx: &Ctx, n: &Node, meta: &CvatMeta) -> Result<Shape, IoError> {
         }
         other => return Err(ctx.err(n.pos, format!("unknown shape <{other}> in a track"))),
     };
+    let frame = ctx.uint(n, "frame")?;
+    if frame >= MAX_FRAMES {
+        return Err(ctx.err(n.pos, format!("frame {frame} is larger than {MAX_FRAMES}")));
+    }
     Ok(Shape {
-        frame: ctx.uint(n, "frame")?,
+        frame,
         outside: ctx.flag(n, "outside", false)?,
         occluded: ctx.flag(n, "occluded", false)?,
         keyframe: ctx.flag(n, "keyframe", true)?,

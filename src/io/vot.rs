@@ -136,8 +136,14 @@ pub fn parse_region(text: &str, file: &str, line: usize) -> Result<Region, IoErr
             })
         };
         let (x, y) = (coord(x, 1)?, coord(y, 2)?);
-        if !(0..=1 << 16).contains(&w) || !(0..=1 << 16).contains(&h) {
-            return Err(IoError::parse(file, line, 3, "mask size in 0..=65536", s));
+        if !(0..=1 << 16).contains(&w) || !(0..=1 << 16).contains(&h) || w * h > 1 << 26 {
+            return Err(IoError::parse(
+                file,
+                line,
+                3,
+                "mask size in 0..=65536 per side, ≤ 64 Mpx",
+                s,
+            ));
         }
         let total = (w * h) as usize;
         let mut data = vec![0u8; total];
