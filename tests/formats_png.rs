@@ -19,7 +19,8 @@ fn tmp_dir(name: &str) -> PathBuf {
     d
 }
 
-fn rect_record(frame: u32, id: i64, w: u32, h: u32, x0: u32, y0: u32, rw: u32, rh: u32) -> Record {
+fn rect_record(frame: u32, id: i64, w: u32, h: u32, rect: (u32, u32, u32, u32)) -> Record {
+    let (x0, y0, rw, rh) = rect;
     let mut bitmap = vec![0u8; (w * h) as usize];
     for y in y0..y0 + rh {
         for x in x0..x0 + rw {
@@ -68,9 +69,9 @@ fn davis_binary_masks() {
 fn roundtrip_folder_with_empty_frame() {
     let (w, h) = (13u32, 9u32);
     let mut recs = vec![
-        rect_record(1, 1, w, h, 0, 0, 3, 2),
-        rect_record(1, 300, w, h, 5, 4, 4, 5),
-        rect_record(3, 65535, w, h, 12, 8, 1, 1),
+        rect_record(1, 1, w, h, (0, 0, 3, 2)),
+        rect_record(1, 300, w, h, (5, 4, 4, 5)),
+        rect_record(3, 65535, w, h, (12, 8, 1, 1)),
     ];
     let dir = tmp_dir("rt");
     write_png_mask_dir(&dir, &recs, w, h, 3).unwrap();
@@ -90,8 +91,8 @@ fn roundtrip_folder_with_empty_frame() {
 #[test]
 fn overlapping_masks_keep_the_lower_id() {
     let (w, h) = (6u32, 6u32);
-    let a = rect_record(1, 2, w, h, 0, 0, 4, 4);
-    let b = rect_record(1, 1, w, h, 2, 2, 4, 4);
+    let a = rect_record(1, 2, w, h, (0, 0, 4, 4));
+    let b = rect_record(1, 1, w, h, (2, 2, 4, 4));
     let png = encode_png_masks(&[a, b.clone()], w, h).unwrap();
     let f = decode_png_masks(&png, 1, "mem", EightBit::Ids).unwrap();
     assert_eq!(f.records[0], b);
@@ -114,12 +115,12 @@ fn wrong_inputs_are_typed_errors() {
         other => panic!("{other:?}"),
     }
     // Truncated PNG.
-    let png = encode_png_masks(&[rect_record(1, 1, 5, 5, 1, 1, 2, 2)], 5, 5).unwrap();
+    let png = encode_png_masks(&[rect_record(1, 1, 5, 5, (1, 1, 2, 2))], 5, 5).unwrap();
     assert!(decode_png_masks(&png[..png.len() / 2], 1, "t.png", EightBit::Ids).is_err());
     // Ids that do not fit, masks of the wrong size.
-    assert!(encode_png_masks(&[rect_record(1, 70000, 5, 5, 1, 1, 2, 2)], 5, 5).is_err());
-    assert!(encode_png_masks(&[rect_record(1, 0, 5, 5, 1, 1, 2, 2)], 5, 5).is_err());
-    assert!(encode_png_masks(&[rect_record(1, 1, 5, 5, 1, 1, 2, 2)], 6, 5).is_err());
+    assert!(encode_png_masks(&[rect_record(1, 70000, 5, 5, (1, 1, 2, 2))], 5, 5).is_err());
+    assert!(encode_png_masks(&[rect_record(1, 0, 5, 5, (1, 1, 2, 2))], 5, 5).is_err());
+    assert!(encode_png_masks(&[rect_record(1, 1, 5, 5, (1, 1, 2, 2))], 6, 5).is_err());
     // Frames of different sizes in one folder.
     let dir = tmp_dir("sizes");
     std::fs::create_dir_all(&dir).unwrap();

@@ -79,7 +79,7 @@ fn anchor_protocol_matches_toolkit() {
             })
             .collect();
         let seq = evaluate_anchor_sequence(&gt, &anchors, &runs, &params).unwrap();
-        let s = summarize_anchor(&[seq.clone()], &params).unwrap();
+        let s = summarize_anchor(std::slice::from_ref(&seq), &params).unwrap();
         let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
         assert!(
             close(s.accuracy, want.anchor.accuracy),

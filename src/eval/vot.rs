@@ -190,7 +190,7 @@ mod exact {
         let (wx, wy) = (t.x0 - s.x0, t.y0 - s.y0);
         let u = (wx * qy - wy * qx) / d;
         let v = (wx * ry - wy * rx) / d;
-        ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then(|| s.x0 + u * rx)
+        ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some(s.x0 + u * rx)
     }
 
     /// A region as edges filled by the even-odd rule, or as pixels.
@@ -689,7 +689,7 @@ pub fn anchors_every(num_frames: usize, spacing: usize) -> Vec<Anchor> {
         .step_by(spacing)
         .map(|f| Anchor {
             frame: f,
-            direction: if num_frames - f >= f + 1 {
+            direction: if num_frames - f > f {
                 Direction::Forward
             } else {
                 Direction::Backward
