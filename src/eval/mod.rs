@@ -28,6 +28,7 @@ mod identity;
 mod masks;
 mod preproc;
 mod sequence;
+pub mod vot;
 
 pub use clear::{clear, Clear};
 pub use error::{EvalError, Location, Problem, Side};
