@@ -44,9 +44,16 @@ pub struct Args {
     /// Print per-anchor (or per-failure) details.
     #[arg(long)]
     verbose: bool,
-    /// Reproduce the VOT toolkit exactly (raster overlap; the anchor frame counts as 0).
-    #[arg(long)]
+    /// Reproduce the VOT toolkit exactly (raster overlap; the anchor frame counts as 0). This is
+    /// the default, so that scores compare with published VOT numbers; the flag is kept for
+    /// scripts that say it explicitly.
+    #[arg(long, conflicts_with = "exact")]
     toolkit: bool,
+    /// Use exact polygon overlap and count each anchor frame as overlap 1 (the tracker was given
+    /// the ground truth there) instead of the toolkit's semantics: a perfect tracker then scores
+    /// A = R = 1.
+    #[arg(long)]
+    exact: bool,
     /// Anchor file (`anchor.value` format: >0 forward, <0 backward).
     #[arg(long)]
     anchors: Option<PathBuf>,
@@ -120,7 +127,8 @@ pub fn run(args: Args) -> crate::CliResult {
         None => image_size(&seq_dir),
     };
     let bounds = if args.unbounded { None } else { size };
-    let method = if args.toolkit {
+    let toolkit = !args.exact || args.toolkit;
+    let method = if toolkit {
         OverlapMethod::Toolkit
     } else {
         OverlapMethod::Exact
@@ -136,7 +144,7 @@ pub fn run(args: Args) -> crate::CliResult {
                 }
                 None => anchors_every(gt.len(), args.anchor_spacing),
             };
-            let params = if args.toolkit {
+            let params = if toolkit {
                 AnchorParams::toolkit(bounds)
             } else {
                 AnchorParams {
