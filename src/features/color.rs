@@ -16,7 +16,8 @@
 //! 4. **C2** ([`color_cost`]): for every aligned B sample, A's sample nearest to it (within
 //!    [`ColorConfig::overlap_radius`] × A's spacing) gives A's label at that place; C2 is the
 //!    fraction of such overlapping samples whose palette colours differ (Alg. 6 steps 6–7:
-//!    "non-zero magnitude" of the difference of the reconstructed colours), in `[0, 1]`.
+//!    "non-zero magnitude" of the difference of the reconstructed colours — here: more than
+//!    [`ColorConfig::color_tolerance`] apart), in `[0, 1]`.
 //!    [`ColorMatch::overlap`] says which fraction of B landed on A at all: a low overlap means
 //!    C2 rests on few samples.
 //!
@@ -99,6 +100,11 @@ pub struct ColorConfig {
     /// label (default 1.0: interior points are always within `√2/2` of a grid sample, and one
     /// spacing tolerates a little misalignment at the border).
     pub overlap_radius: f64,
+    /// Palette colours closer than this (Euclidean RGB distance) count as the same colour
+    /// (default 20; 0 is the thesis' literal "non-zero difference"). With K larger than the
+    /// number of colours an object really has, k-means splits a colour into shades along
+    /// noise and shading, and the literal rule would count those shades as colour changes.
+    pub color_tolerance: f64,
 }
 
 impl Default for ColorConfig {
@@ -111,6 +117,7 @@ impl Default for ColorConfig {
             seed: 0xc010_7000,
             max_samples: 1500,
             overlap_radius: 1.0,
+            color_tolerance: 20.0,
         }
     }
 }
@@ -137,12 +144,15 @@ impl ColorConfig {
         if !(self.overlap_radius.is_finite() && self.overlap_radius > 0.0) {
             return bad("overlap_radius", "must be finite and > 0");
         }
+        if !(self.color_tolerance.is_finite() && self.color_tolerance >= 0.0) {
+            return bad("color_tolerance", "must be finite and ≥ 0");
+        }
         Ok(())
     }
 }
 
 /// Colour samples of one shape: pixel-centre positions (image coordinates) and their RGB.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ColorSample {
     /// Sample positions (pixel centres).
     pub positions: Vec<Point>,
@@ -150,6 +160,17 @@ pub struct ColorSample {
     pub rgb: Vec<[u8; 3]>,
     /// Grid spacing in pixels (≥ 1): the distance between neighbouring samples.
     pub spacing: f64,
+}
+
+impl Default for ColorSample {
+    /// No samples, unit spacing.
+    fn default() -> Self {
+        Self {
+            positions: Vec::new(),
+            rgb: Vec::new(),
+            spacing: 1.0,
+        }
+    }
 }
 
 impl ColorSample {
@@ -305,14 +326,18 @@ impl Palette {
         (hist(&self.labels_a), hist(&self.labels_b))
     }
 
-    /// Whether labels `i` and `j` reconstruct to different colours (k-means++ may pick the
-    /// same colour twice when there are fewer distinct colours than K).
-    fn differ(&self, i: usize, j: usize) -> bool {
+    /// Whether labels `i` and `j` reconstruct to colours more than `tolerance` apart
+    /// (Euclidean RGB distance; at least 1e-6, because k-means++ may pick the same colour
+    /// twice when there are fewer distinct colours than K).
+    pub fn differ(&self, i: usize, j: usize, tolerance: f64) -> bool {
         if i == j {
             return false;
         }
         match (self.centroids.get(i), self.centroids.get(j)) {
-            (Some(a), Some(b)) => a.iter().zip(b).any(|(x, y)| (x - y).abs() > 1e-6),
+            (Some(a), Some(b)) => {
+                let d2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+                d2.sqrt() > tolerance.max(1e-6)
+            }
             _ => true,
         }
     }
@@ -428,6 +453,10 @@ pub fn color_cost(
             )
         }
     };
+    let k = palette.centroids.len();
+    let differ: Vec<bool> = (0..k * k)
+        .map(|ij| palette.differ(ij / k, ij % k, cfg.color_tolerance))
+        .collect();
     let index = PointIndex::new(&a.positions);
     let radius = cfg.overlap_radius * a.spacing;
     let (mut compared, mut differing) = (0usize, 0usize);
@@ -442,7 +471,7 @@ pub fn color_cost(
             continue;
         };
         compared += 1;
-        if palette.differ(la, lb) {
+        if differ.get(la * k + lb).copied().unwrap_or(true) {
             differing += 1;
         }
     }
