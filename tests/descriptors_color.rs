@@ -36,12 +36,7 @@ fn rearranged(u: f64, v: f64) -> [u8; 3] {
 
 /// An RGB frame with a disk-with-a-notch object of radius 30 centred at `(cx, cy)`, scaled
 /// by `scale` and textured by `tex` in object coordinates; the rest is grey noise.
-fn scene(
-    cx: f64,
-    cy: f64,
-    scale: f64,
-    tex: fn(f64, f64) -> [u8; 3],
-) -> (Vec<u8>, Mask) {
+fn scene(cx: f64, cy: f64, scale: f64, tex: fn(f64, f64) -> [u8; 3]) -> (Vec<u8>, Mask) {
     let mut buf = vec![0u8; (W * H * 3) as usize];
     let mut full = vec![0u8; (W * H) as usize];
     for y in 0..H {
@@ -211,15 +206,7 @@ fn degenerate_samples_are_typed_errors_or_well_defined() {
         Err(ColorError::NonFinite { index: 0 })
     ));
     assert!(matches!(
-        color_cost(
-            &a,
-            &a,
-            None,
-            &ColorConfig {
-                clusters: 0,
-                ..cfg
-            }
-        ),
+        color_cost(&a, &a, None, &ColorConfig { clusters: 0, ..cfg }),
         Err(ColorError::InvalidConfig { .. })
     ));
     // One sample each (fewer than K) and a single flat colour: k-means still runs.

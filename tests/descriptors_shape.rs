@@ -82,7 +82,11 @@ fn moved(contour: &[Point], t: &Similarity, start: usize, jitter: f64, seed: u64
 
 fn assert_sane(m: &ShapeMatch) {
     assert!(m.cost.is_finite() && m.cost >= 0.0, "cost {:?}", m);
-    assert!(m.mean_distance.is_finite() && m.mean_distance >= 0.0, "{:?}", m);
+    assert!(
+        m.mean_distance.is_finite() && m.mean_distance >= 0.0,
+        "{:?}",
+        m
+    );
     assert!(m.scale.is_finite() && m.scale > 0.0);
     if let Some(c) = m.descriptor_cost {
         assert!((0.0..=1.0).contains(&c));
@@ -153,7 +157,7 @@ proptest! {
         let b = norm(&b, &[false; 60]);
         let ab = chi2_cost(&a, &b).unwrap();
         let ba = chi2_cost(&b, &a).unwrap();
-        prop_assert!(ab.is_finite() && ab >= 0.0 && ab <= 1.0 + 1e-12);
+        prop_assert!(ab.is_finite() && (0.0..=1.0 + 1e-12).contains(&ab));
         prop_assert!((ab - ba).abs() < 1e-12);
         prop_assert_eq!(chi2_cost(&a, &a).unwrap(), 0.0);
     }
@@ -263,7 +267,13 @@ fn sift_variant_with_perfect_matches_costs_nothing() {
     };
     let b: Vec<Point> = a.iter().map(|p| t.apply(*p)).collect();
     // Keypoints anywhere on the object, not only on the outline.
-    let keypoints = [(0.0, 0.0), (10.0, 5.0), (-12.0, 20.0), (25.0, -7.0), (-3.0, -30.0)];
+    let keypoints = [
+        (0.0, 0.0),
+        (10.0, 5.0),
+        (-12.0, 20.0),
+        (25.0, -7.0),
+        (-3.0, -30.0),
+    ];
     let mut matches: Vec<(Point, Point)> = keypoints
         .iter()
         .map(|&(x, y)| {
@@ -356,7 +366,11 @@ fn degenerate_inputs_are_typed_errors_never_panics() {
             ..
         })
     ));
-    let tri = [Point::new(0.0, 0.0), Point::new(10.0, 0.0), Point::new(0.0, 10.0)];
+    let tri = [
+        Point::new(0.0, 0.0),
+        Point::new(10.0, 0.0),
+        Point::new(0.0, 10.0),
+    ];
     assert!(matches!(
         shape_cost_from_matches(&tri, &[p, p], &[], &cfg),
         Err(ShapeContextError::TooFewVertices { got: 2, .. })
@@ -368,7 +382,9 @@ fn degenerate_inputs_are_typed_errors_never_panics() {
     let bad = [(Point::new(f64::INFINITY, 0.0), p); 4];
     assert!(matches!(
         shape_cost_from_matches(&tri, &tri, &bad, &cfg),
-        Err(ShapeContextError::Transform(TransformError::NonFinite { .. }))
+        Err(ShapeContextError::Transform(
+            TransformError::NonFinite { .. }
+        ))
     ));
     // Different bin layouts cannot be compared.
     let a = ShapeDescriptor::from_contour(&circle(5.0, 8), &cfg).unwrap();

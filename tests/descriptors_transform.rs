@@ -98,7 +98,7 @@ proptest! {
                 Ok(inv) => {
                     prop_assert_eq!(inv.kind(), t.kind());
                     let back = inv.apply(t.apply(p));
-                    let tol = 1e-6 * (1.0 + x.abs() + y.abs()) / aff.det().abs().min(1.0).max(1e-3);
+                    let tol = 1e-6 * (1.0 + x.abs() + y.abs()) / aff.det().abs().clamp(1e-3, 1.0);
                     prop_assert!(back.dist(p) < tol, "{t:?}: {back:?} vs {p:?}");
                 }
                 Err(TransformError::NotInvertible { det }) => {

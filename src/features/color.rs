@@ -176,11 +176,7 @@ impl Default for ColorSample {
 impl ColorSample {
     /// Samples from explicit positions and colours, checked for equal lengths, finite
     /// positions and a finite spacing > 0.
-    pub fn new(
-        positions: Vec<Point>,
-        rgb: Vec<[u8; 3]>,
-        spacing: f64,
-    ) -> Result<Self, ColorError> {
+    pub fn new(positions: Vec<Point>, rgb: Vec<[u8; 3]>, spacing: f64) -> Result<Self, ColorError> {
         if positions.len() != rgb.len() {
             return Err(ColorError::LengthMismatch {
                 positions: positions.len(),

@@ -188,10 +188,9 @@ impl Default for Transform {
 }
 
 fn check_finite(matches: &[(Point, Point)]) -> Result<(), TransformError> {
-    match matches
-        .iter()
-        .position(|(s, t)| !(s.x.is_finite() && s.y.is_finite() && t.x.is_finite() && t.y.is_finite()))
-    {
+    match matches.iter().position(|(s, t)| {
+        !(s.x.is_finite() && s.y.is_finite() && t.x.is_finite() && t.y.is_finite())
+    }) {
         Some(index) => Err(TransformError::NonFinite { index }),
         None => Ok(()),
     }
@@ -887,7 +886,10 @@ mod tests {
     fn relative_area_is_one_for_equilateral_and_zero_for_collinear() {
         let h = 3f64.sqrt() / 2.0;
         assert!((relative_area(&pts(&[(0.0, 0.0), (1.0, 0.0), (0.5, h)])) - 1.0).abs() < 1e-12);
-        assert_eq!(relative_area(&pts(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)])), 0.0);
+        assert_eq!(
+            relative_area(&pts(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)])),
+            0.0
+        );
         assert_eq!(relative_area(&pts(&[(0.0, 0.0), (1.0, 1.0)])), 0.0);
     }
 
@@ -937,7 +939,9 @@ mod tests {
     fn point_index_agrees_with_brute_force() {
         let mut s = 12345u64;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) * 100.0
         };
         let points: Vec<Point> = (0..300).map(|_| Point::new(next(), next())).collect();
@@ -946,7 +950,10 @@ mod tests {
         for _ in 0..200 {
             let q = Point::new(next() * 1.2 - 10.0, next() * 1.2 - 10.0);
             let (i, d) = index.nearest(q).unwrap();
-            let brute = points.iter().map(|p| p.dist(q)).fold(f64::INFINITY, f64::min);
+            let brute = points
+                .iter()
+                .map(|p| p.dist(q))
+                .fold(f64::INFINITY, f64::min);
             assert!((d - brute).abs() < 1e-12);
             assert!((points[i].dist(q) - d).abs() < 1e-12);
         }
