@@ -28,7 +28,7 @@
 //!
 //! - C1 is **symmetric**: `½·(Σ_b d(T(b), A) + Σ_a d(a, T(B)))`. The one-sided sum of step 10 of
 //!   Alg. 4 rewards a transform that shrinks B onto a few of A's vertices; the symmetric form
-//!   cannot be gamed that way and equals the one-sided one for a good alignment.
+//!   cannot be gamed that way and is close to the one-sided one for a good alignment.
 //! - C1 is divided by A's median pairwise distance, so it does not grow with object size
 //!   ([`ShapeMatch::scale`] keeps that distance to convert back to pixels).
 //! - The RANSAC fit is refined by a few iterative-closest-point steps (re-pair each B vertex
@@ -40,10 +40,13 @@
 //!   translation is tried, and if that fails too, the **fallback** alignment maps B's vertex
 //!   centroid onto A's and scales by the ratio of median distances ([`ShapeMatch::fitted`] is
 //!   then false). A cost is always produced for valid shapes: the tracker needs a number for
-//!   every pair in a cluster.
+//!   every pair in a cluster. Non-collinearity (step 8) is enforced where it matters, in the
+//!   affine fit; a similarity is well defined by any two distinct points.
 //! - [`Orientation`] makes the descriptor rotation invariant on request. It is off by default:
 //!   between consecutive frames objects barely rotate, and absolute angles tell a shape from
 //!   its rotated neighbour (a "6" from a "9").
+//!
+//! [`normalize_in_cluster`] is the thesis' "normalised within the cluster" step for C1 and C2.
 
 use super::transform::{
     ransac, PointIndex, RansacConfig, Similarity, Transform, TransformError, TransformKind,
@@ -232,7 +235,10 @@ impl ShapeContextConfig {
 }
 
 /// One shape's vertices and their log-polar histograms; build once per detection and reuse.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+///
+/// Serialisable for caching and export, but deliberately not deserialisable: its invariants
+/// (histogram size, positive median) are only established by the constructors.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ShapeDescriptor {
     vertices: Vec<Point>,
     /// `vertices.len() × bins`, row-major; each row sums to 1 (or is all zero when no other

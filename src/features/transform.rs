@@ -115,7 +115,8 @@ pub struct Translation {
 /// A similarity `p ↦ s·R(θ)·p + t`.
 ///
 /// In the thesis' notation (eq. 32–33) `x' = a·x − b·y + c`, `y' = b·x + a·y + d` with
-/// `a = s·cos θ`, `b = s·sin θ`. In image coordinates (y down) a positive `θ` turns the x axis
+/// `a = s·cos θ`, `b = s·sin θ` (the thesis' α of eq. 28 is −θ, and its eq. 37 `tanh⁻¹`
+/// should read `atan2`: `θ = atan2(b, a)`). In image coordinates (y down) a positive `θ` turns the x axis
 /// towards +y, i.e. clockwise on screen.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Similarity {
