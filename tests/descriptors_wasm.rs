@@ -15,7 +15,13 @@ fn colour_cost_runs_kmeans_on_wasm() {
         .map(|i| Point::new((i % 20) as f64, (i / 20) as f64))
         .collect();
     let rgb: Vec<[u8; 3]> = (0..400)
-        .map(|i| if i % 20 < 10 { [200, 20, 20] } else { [20, 20, 200] })
+        .map(|i| {
+            if i % 20 < 10 {
+                [200, 20, 20]
+            } else {
+                [20, 20, 200]
+            }
+        })
         .collect();
     let a = ColorSample::new(positions, rgb, 1.0).unwrap();
     let m = color_cost(&a, &a, None, &ColorConfig::default()).unwrap();
@@ -31,7 +37,10 @@ fn shape_cost_runs_on_wasm() {
         Point::new(40.0, 40.0),
         Point::new(0.0, 40.0),
     ];
-    let moved: Vec<Point> = sq.iter().map(|p| Point::new(p.x + 5.0, p.y + 3.0)).collect();
+    let moved: Vec<Point> = sq
+        .iter()
+        .map(|p| Point::new(p.x + 5.0, p.y + 3.0))
+        .collect();
     let m = shape_cost(&sq, &moved, &ShapeContextConfig::default()).unwrap();
     assert!(m.cost < 1e-6 && m.fitted);
 }
