@@ -1,1 +1,3 @@
 //! features (work in progress).
+
+pub mod sift;
