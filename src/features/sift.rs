@@ -424,6 +424,7 @@ fn detect_float(
     let size_scale = 0.5 * (sx + sy);
     let mut keypoints = Vec::with_capacity(raw.len());
     let mut descriptors = Vec::with_capacity(raw.len());
+    let mut weights = Vec::new();
     for k in &raw {
         let Some(img) = gpyr.get(k.octave * (n_layers + 3) + k.layer) else {
             continue;
@@ -433,7 +434,14 @@ fn detect_float(
         if (ori - 360.0).abs() < f32::EPSILON {
             ori = 0.0;
         }
-        descriptors.push(calc_descriptor(img, k.x_oct, k.y_oct, ori, k.scale_oct));
+        descriptors.push(calc_descriptor(
+            img,
+            k.x_oct,
+            k.y_oct,
+            ori,
+            k.scale_oct,
+            &mut weights,
+        ));
         let (x, y) = to_input(k.octave, k.x_oct, k.y_oct);
         keypoints.push(Keypoint {
             x,

@@ -52,9 +52,25 @@ pub(crate) struct DetectParams {
 }
 
 /// OpenCV's `cvRound` for floats: nearest, ties to even.
+///
+/// Baseline x86-64 has no rounding instruction, so `round_ties_even` is a libm call; adding and
+/// subtracting 1.5·2²³ rounds exactly (to even, in the default rounding mode) for |v| < 2²².
 #[inline]
 pub(crate) fn cv_round(v: f32) -> i32 {
-    v.round_ties_even() as i32
+    const MAGIC: f32 = 12_582_912.0;
+    if v.abs() < 4_194_304.0 {
+        ((v + MAGIC) - MAGIC) as i32
+    } else {
+        v.round_ties_even() as i32
+    }
+}
+
+/// `floor(v)` as an integer, exact for |v| < 2³¹, without the libm call `f32::floor` costs on
+/// baseline x86-64.
+#[inline]
+pub(crate) fn floor_i32(v: f32) -> i32 {
+    let t = v as i32;
+    t - i32::from((t as f32) > v)
 }
 
 /// Finds every keypoint (one per dominant orientation) in the pyramids. `keep(octave, x_oct,
@@ -74,6 +90,7 @@ pub(crate) fn find_scale_space_extrema(
         (0.5 * f64::from(p.contrast_threshold) / n_layers as f64 * 255.0).floor() as f32;
     let mut out = Vec::new();
     let mut hist = [0f32; ORI_HIST_BINS];
+    let mut weights = Vec::new();
     for o in 0..n_octaves {
         for i in 1..=n_layers {
             let idx = o * (n_layers + 2) + i;
@@ -119,6 +136,7 @@ pub(crate) fn find_scale_space_extrema(
                         cv_round(ORI_RADIUS * scl_octv),
                         ORI_SIG_FCTR * scl_octv,
                         &mut hist,
+                        &mut weights,
                     );
                     let mag_thr = omax * ORI_PEAK_RATIO;
                     let n = ORI_HIST_BINS;
@@ -359,9 +377,9 @@ pub(crate) fn fast_atan2_deg(y: f32, x: f32) -> f32 {
     a
 }
 
-/// Gradient-orientation histogram (36 bins, magnitude × Gaussian weight) of the disc of
+/// Gradient-orientation histogram (36 bins, magnitude × Gaussian weight) of the square of
 /// `radius` around `(cx, cy)`, smoothed with the `[1 4 6 4 1] / 16` kernel; returns its maximum.
-/// Gradients use y up (`dy = I(y-1) - I(y+1)`), as OpenCV.
+/// Gradients use y up (`dy = I(y-1) - I(y+1)`), as OpenCV. `weights` is reused scratch space.
 pub(crate) fn orientation_hist(
     img: &Plane,
     cx: isize,
@@ -369,32 +387,28 @@ pub(crate) fn orientation_hist(
     radius: i32,
     sigma: f32,
     hist: &mut [f32; ORI_HIST_BINS],
+    weights: &mut Vec<f32>,
 ) -> f32 {
     const N: usize = ORI_HIST_BINS;
-    let radius = radius as isize;
+    let radius = radius.max(0) as isize;
     let expf_scale = -1.0 / (2.0 * sigma * sigma);
+    // exp((i² + j²)·s) = exp(i²·s)·exp(j²·s): one exp per offset instead of per sample.
+    weights.clear();
+    weights.extend((0..=radius).map(|k| ((k * k) as f32 * expf_scale).exp()));
     // Two bins of circular padding on each side for the smoothing.
     let mut temp = [0f32; N + 4];
     let (w, h) = (img.w as isize, img.h as isize);
-    for i in -radius..=radius {
-        let y = cy + i;
-        if y <= 0 || y >= h - 1 {
-            continue;
-        }
-        let (up, row, down) = (
-            img.row(y as usize - 1),
-            img.row(y as usize),
-            img.row(y as usize + 1),
-        );
-        for j in -radius..=radius {
-            let x = cx + j;
-            if x <= 0 || x >= w - 1 {
-                continue;
-            }
-            let xu = x as usize;
+    let (i0, i1) = ((1 - cy).max(-radius), (h - 2 - cy).min(radius));
+    let (j0, j1) = ((1 - cx).max(-radius), (w - 2 - cx).min(radius));
+    for i in i0..=i1 {
+        let y = (cy + i) as usize;
+        let (up, row, down) = (img.row(y - 1), img.row(y), img.row(y + 1));
+        let wi = weights[i.unsigned_abs()];
+        for j in j0..=j1 {
+            let xu = (cx + j) as usize;
             let dx = row[xu + 1] - row[xu - 1];
             let dy = up[xu] - down[xu];
-            let wgt = (((i * i + j * j) as f32) * expf_scale).exp();
+            let wgt = wi * weights[j.unsigned_abs()];
             let ori = fast_atan2_deg(dy, dx);
             let mag = (dx * dx + dy * dy).sqrt();
             let mut bin = cv_round((N as f32 / 360.0) * ori);
@@ -425,6 +439,39 @@ pub(crate) fn orientation_hist(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_rounding_matches_std() {
+        let vals = [
+            -3.5f32,
+            -2.5,
+            -1.5,
+            -0.5,
+            -0.49,
+            0.0,
+            0.5,
+            1.5,
+            2.5,
+            2.4999,
+            7.5,
+            1e6 + 0.5,
+            5e6,
+            -1e-9,
+            -0.99999,
+            3.0e9,
+        ];
+        for v in vals {
+            assert_eq!(cv_round(v), v.round_ties_even() as i32, "round {v}");
+            if v.abs() < 2e9 {
+                assert_eq!(floor_i32(v), v.floor() as i32, "floor {v}");
+            }
+        }
+        for k in -2000..2000 {
+            let v = k as f32 * 0.0625;
+            assert_eq!(cv_round(v), v.round_ties_even() as i32);
+            assert_eq!(floor_i32(v), v.floor() as i32);
+        }
+    }
 
     #[test]
     fn fast_atan2_is_within_a_third_of_a_degree() {
@@ -464,7 +511,7 @@ mod tests {
             .collect();
         let img = Plane { w, h, data };
         let mut hist = [0f32; ORI_HIST_BINS];
-        let max = orientation_hist(&img, 20, 20, 8, 3.0, &mut hist);
+        let max = orientation_hist(&img, 20, 20, 8, 3.0, &mut hist, &mut Vec::new());
         let peak = hist.iter().position(|&v| v == max).unwrap();
         assert_eq!(peak, 33);
     }
