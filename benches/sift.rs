@@ -1,5 +1,6 @@
-//! SIFT speed: `detect_and_compute` on square crops of a seeded texture (64, 128, 256 px, OpenCV
-//! defaults, i.e. with 2× upsampling), and ratio-test matching of 200 × 200 descriptors.
+//! SIFT speed: `detect_and_compute` on square crops of a seeded texture (64, 128, 256 px; OpenCV
+//! defaults, i.e. with 2× upsampling, and without upsampling), and ratio-test matching of
+//! 200 × 200 descriptors (with and without cross check).
 //!
 //! Run with `cargo bench --bench sift`.
 
@@ -46,8 +47,16 @@ fn bench_detect(c: &mut Criterion) {
             .unwrap()
             .len();
         eprintln!("{side}x{side}: {n} keypoints");
-        g.bench_with_input(BenchmarkId::from_parameter(side), &img, |b, img| {
+        g.bench_with_input(BenchmarkId::new("default", side), &img, |b, img| {
             b.iter(|| detect_and_compute(black_box(img), None, &SiftConfig::default()).unwrap())
+        });
+        // Without OpenCV's 2x upsampling: the cheap setting for the tracker's crops.
+        let cheap = SiftConfig {
+            upsample: false,
+            ..SiftConfig::default()
+        };
+        g.bench_with_input(BenchmarkId::new("no_upsample", side), &img, |b, img| {
+            b.iter(|| detect_and_compute(black_box(img), None, &cheap).unwrap())
         });
     }
     g.finish();

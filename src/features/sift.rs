@@ -424,7 +424,7 @@ fn detect_float(
     let size_scale = 0.5 * (sx + sy);
     let mut keypoints = Vec::with_capacity(raw.len());
     let mut descriptors = Vec::with_capacity(raw.len());
-    let mut weights = Vec::new();
+    let mut scratch = descriptor::DescriptorScratch::default();
     for k in &raw {
         let Some(img) = gpyr.get(k.octave * (n_layers + 3) + k.layer) else {
             continue;
@@ -440,7 +440,7 @@ fn detect_float(
             k.y_oct,
             ori,
             k.scale_oct,
-            &mut weights,
+            &mut scratch,
         ));
         let (x, y) = to_input(k.octave, k.x_oct, k.y_oct);
         keypoints.push(Keypoint {

@@ -38,17 +38,29 @@ fn solve_band(a: f32, lo: f32, hi: f32, min: isize, max: isize) -> (isize, isize
     (start, end)
 }
 
+/// Scratch buffers reused across keypoints so the descriptor loop never allocates.
+#[derive(Debug, Default)]
+pub(crate) struct DescriptorScratch {
+    /// Gaussian weight per offset `-radius..=radius` (index `offset + radius`).
+    weights: Vec<f32>,
+    /// Per-sample values of the current row.
+    dx: Vec<f32>,
+    dy: Vec<f32>,
+    ori: Vec<f32>,
+    mag: Vec<f32>,
+}
+
 /// Computes the descriptor of the keypoint at `(x, y)` (octave coordinates), orientation `ori`
 /// degrees (in the y-up convention of the gradients: OpenCV passes `360 - angle`) and scale
 /// `scl` (octave pixels). Returns the clipped vector normalised to unit L2 norm (all zeros when
-/// the window has no gradient). `weights` is scratch space reused across keypoints.
+/// the window has no gradient).
 pub(crate) fn calc_descriptor(
     img: &Plane,
     x: f32,
     y: f32,
     ori: f32,
     scl: f32,
-    weights: &mut Vec<f32>,
+    scratch: &mut DescriptorScratch,
 ) -> [f32; DESCR_LEN] {
     let pt_x = cv_round(x) as isize;
     let pt_y = cv_round(y) as isize;
@@ -72,8 +84,15 @@ pub(crate) fn calc_descriptor(
     // The Gaussian weight exp(|(c_rot, r_rot)|² · s) only depends on i² + j² (a rotation keeps
     // lengths), so it factors into exp(i²·t) · exp(j²·t): one exp per offset, not per sample.
     let t = exp_scale / (hist_width * hist_width);
+    let DescriptorScratch {
+        weights,
+        dx: dxs,
+        dy: dys,
+        ori: oris,
+        mag: mags,
+    } = scratch;
     weights.clear();
-    weights.extend((0..=radius).map(|k| ((k * k) as f32 * t).exp()));
+    weights.extend((-radius..=radius).map(|k| ((k * k) as f32 * t).exp()));
 
     // Rows and columns whose gradient exists.
     let i_min = (1 - pt_y).max(-radius);
@@ -101,8 +120,40 @@ pub(crate) fn calc_descriptor(
             j_min_img,
             j_max_img,
         );
-        let wi = weights[i.unsigned_abs()];
-        for j in a0.max(b0)..=a1.min(b1) {
+        let (j0, j1) = (a0.max(b0), a1.min(b1));
+        if j0 > j1 {
+            continue;
+        }
+        // Gradients, orientations and weighted magnitudes of the whole row segment first, in
+        // straight-line loops the compiler vectorises; then the scalar histogram scatter.
+        let (c0, c1) = ((pt_x + j0) as usize, (pt_x + j1) as usize);
+        let n = c1 - c0 + 1;
+        let wi = weights[(i + radius) as usize];
+        let wrow = &weights[(j0 + radius) as usize..=(j1 + radius) as usize];
+        dxs.clear();
+        dxs.extend(
+            row[c0 + 1..=c1 + 1]
+                .iter()
+                .zip(&row[c0 - 1..=c1 - 1])
+                .map(|(a, b)| a - b),
+        );
+        dys.clear();
+        dys.extend(up[c0..=c1].iter().zip(&down[c0..=c1]).map(|(a, b)| a - b));
+        oris.clear();
+        oris.extend(
+            dys.iter()
+                .zip(dxs.iter())
+                .map(|(&dy, &dx)| fast_atan2_deg(dy, dx)),
+        );
+        mags.clear();
+        mags.extend(
+            dxs.iter()
+                .zip(dys.iter())
+                .zip(wrow)
+                .map(|((&dx, &dy), &wj)| (dx * dx + dy * dy).sqrt() * (wi * wj)),
+        );
+        for k in 0..n {
+            let j = j0 + k as isize;
             // Sample position in the rotated histogram frame; the -0.5 makes a sample at the
             // centre of a cell put its whole weight in that cell.
             let c_rot = j as f32 * cos_t - fi * sin_t;
@@ -112,11 +163,7 @@ pub(crate) fn calc_descriptor(
             if !(rbin > -1.0 && rbin < D as f32 && cbin > -1.0 && cbin < D as f32) {
                 continue;
             }
-            let cu = (pt_x + j) as usize;
-            let dx = row[cu + 1] - row[cu - 1];
-            let dy = up[cu] - down[cu];
-            let grad_ori = fast_atan2_deg(dy, dx);
-            let mag = (dx * dx + dy * dy).sqrt() * (wi * weights[j.unsigned_abs()]);
+            let (grad_ori, mag) = (oris[k], mags[k]);
             let mut obin = (grad_ori - ori) * bins_per_deg;
 
             let r0 = floor_i32(rbin);
@@ -262,7 +309,7 @@ mod tests {
             h,
             data: (0..w * h).map(|_| rng.gen_range(0.0..255.0)).collect(),
         };
-        let mut weights = Vec::new();
+        let mut weights = DescriptorScratch::default();
         for _ in 0..300 {
             // Include keypoints near and beyond the borders and every orientation.
             let (x, y) = (rng.gen_range(-3.0..73.0), rng.gen_range(-3.0..53.0));

@@ -90,7 +90,7 @@ pub(crate) fn find_scale_space_extrema(
         (0.5 * f64::from(p.contrast_threshold) / n_layers as f64 * 255.0).floor() as f32;
     let mut out = Vec::new();
     let mut hist = [0f32; ORI_HIST_BINS];
-    let mut weights = Vec::new();
+    let mut scratch = HistScratch::default();
     for o in 0..n_octaves {
         for i in 1..=n_layers {
             let idx = o * (n_layers + 2) + i;
@@ -136,7 +136,7 @@ pub(crate) fn find_scale_space_extrema(
                         cv_round(ORI_RADIUS * scl_octv),
                         ORI_SIG_FCTR * scl_octv,
                         &mut hist,
-                        &mut weights,
+                        &mut scratch,
                     );
                     let mag_thr = omax * ORI_PEAK_RATIO;
                     let n = ORI_HIST_BINS;
@@ -359,27 +359,34 @@ pub(crate) fn fast_atan2_deg(y: f32, x: f32) -> f32 {
     const P7: f32 = -2.539_725;
     const EPS: f32 = f64::EPSILON as f32;
     let (ax, ay) = (x.abs(), y.abs());
-    let mut a = if ax >= ay {
-        let c = ay / (ax + EPS);
-        let c2 = c * c;
-        (((P7 * c2 + P5) * c2 + P3) * c2 + P1) * c
-    } else {
-        let c = ax / (ay + EPS);
-        let c2 = c * c;
-        90.0 - (((P7 * c2 + P5) * c2 + P3) * c2 + P1) * c
-    };
-    if x < 0.0 {
-        a = 180.0 - a;
-    }
+    // Written with selects only (no early branches) so loops over it vectorise.
+    let steep = ax < ay;
+    let (num, den) = if steep { (ax, ay) } else { (ay, ax) };
+    let c = num / (den + EPS);
+    let c2 = c * c;
+    let p = (((P7 * c2 + P5) * c2 + P3) * c2 + P1) * c;
+    let a = if steep { 90.0 - p } else { p };
+    let a = if x < 0.0 { 180.0 - a } else { a };
     if y < 0.0 {
-        a = 360.0 - a;
+        360.0 - a
+    } else {
+        a
     }
-    a
+}
+
+/// Scratch buffers reused across keypoints by [`orientation_hist`].
+#[derive(Debug, Default)]
+pub(crate) struct HistScratch {
+    weights: Vec<f32>,
+    dx: Vec<f32>,
+    dy: Vec<f32>,
+    ori: Vec<f32>,
+    mag: Vec<f32>,
 }
 
 /// Gradient-orientation histogram (36 bins, magnitude × Gaussian weight) of the square of
 /// `radius` around `(cx, cy)`, smoothed with the `[1 4 6 4 1] / 16` kernel; returns its maximum.
-/// Gradients use y up (`dy = I(y-1) - I(y+1)`), as OpenCV. `weights` is reused scratch space.
+/// Gradients use y up (`dy = I(y-1) - I(y+1)`), as OpenCV.
 pub(crate) fn orientation_hist(
     img: &Plane,
     cx: isize,
@@ -387,30 +394,59 @@ pub(crate) fn orientation_hist(
     radius: i32,
     sigma: f32,
     hist: &mut [f32; ORI_HIST_BINS],
-    weights: &mut Vec<f32>,
+    scratch: &mut HistScratch,
 ) -> f32 {
     const N: usize = ORI_HIST_BINS;
     let radius = radius.max(0) as isize;
     let expf_scale = -1.0 / (2.0 * sigma * sigma);
+    let HistScratch {
+        weights,
+        dx: dxs,
+        dy: dys,
+        ori: oris,
+        mag: mags,
+    } = scratch;
     // exp((i² + j²)·s) = exp(i²·s)·exp(j²·s): one exp per offset instead of per sample.
     weights.clear();
-    weights.extend((0..=radius).map(|k| ((k * k) as f32 * expf_scale).exp()));
+    weights.extend((-radius..=radius).map(|k| ((k * k) as f32 * expf_scale).exp()));
     // Two bins of circular padding on each side for the smoothing.
     let mut temp = [0f32; N + 4];
     let (w, h) = (img.w as isize, img.h as isize);
     let (i0, i1) = ((1 - cy).max(-radius), (h - 2 - cy).min(radius));
     let (j0, j1) = ((1 - cx).max(-radius), (w - 2 - cx).min(radius));
+    if j0 > j1 {
+        return smooth(&mut temp, hist);
+    }
+    let (c0, c1) = ((cx + j0) as usize, (cx + j1) as usize);
+    let wrow = &weights[(j0 + radius) as usize..=(j1 + radius) as usize];
     for i in i0..=i1 {
         let y = (cy + i) as usize;
         let (up, row, down) = (img.row(y - 1), img.row(y), img.row(y + 1));
-        let wi = weights[i.unsigned_abs()];
-        for j in j0..=j1 {
-            let xu = (cx + j) as usize;
-            let dx = row[xu + 1] - row[xu - 1];
-            let dy = up[xu] - down[xu];
-            let wgt = wi * weights[j.unsigned_abs()];
-            let ori = fast_atan2_deg(dy, dx);
-            let mag = (dx * dx + dy * dy).sqrt();
+        let wi = weights[(i + radius) as usize];
+        // Vectorisable passes over the row segment, then the scalar binning.
+        dxs.clear();
+        dxs.extend(
+            row[c0 + 1..=c1 + 1]
+                .iter()
+                .zip(&row[c0 - 1..=c1 - 1])
+                .map(|(a, b)| a - b),
+        );
+        dys.clear();
+        dys.extend(up[c0..=c1].iter().zip(&down[c0..=c1]).map(|(a, b)| a - b));
+        oris.clear();
+        oris.extend(
+            dys.iter()
+                .zip(dxs.iter())
+                .map(|(&dy, &dx)| fast_atan2_deg(dy, dx)),
+        );
+        mags.clear();
+        mags.extend(
+            dxs.iter()
+                .zip(dys.iter())
+                .zip(wrow)
+                .map(|((&dx, &dy), &wj)| (wi * wj) * (dx * dx + dy * dy).sqrt()),
+        );
+        for (&ori, &mag) in oris.iter().zip(mags.iter()) {
             let mut bin = cv_round((N as f32 / 360.0) * ori);
             if bin >= N as i32 {
                 bin -= N as i32;
@@ -418,9 +454,15 @@ pub(crate) fn orientation_hist(
             if bin < 0 {
                 bin += N as i32;
             }
-            temp[2 + bin as usize] += wgt * mag;
+            temp[2 + bin as usize] += mag;
         }
     }
+    smooth(&mut temp, hist)
+}
+
+/// Circularly pads `temp` (bins at `2..N+2`), smooths it into `hist` and returns the maximum.
+fn smooth(temp: &mut [f32; ORI_HIST_BINS + 4], hist: &mut [f32; ORI_HIST_BINS]) -> f32 {
+    const N: usize = ORI_HIST_BINS;
     temp[1] = temp[N + 1];
     temp[0] = temp[N];
     temp[N + 2] = temp[2];
@@ -511,7 +553,7 @@ mod tests {
             .collect();
         let img = Plane { w, h, data };
         let mut hist = [0f32; ORI_HIST_BINS];
-        let max = orientation_hist(&img, 20, 20, 8, 3.0, &mut hist, &mut Vec::new());
+        let max = orientation_hist(&img, 20, 20, 8, 3.0, &mut hist, &mut HistScratch::default());
         let peak = hist.iter().position(|&v| v == max).unwrap();
         assert_eq!(peak, 33);
     }

@@ -17,8 +17,8 @@ fn dist_sq_bounded(a: &[u8; DESCR_LEN], b: &[u8; DESCR_LEN], bound: u32) -> u32 
     for (ca, cb) in a.chunks_exact(BLOCK).zip(b.chunks_exact(BLOCK)) {
         let mut s = 0i32;
         for (&x, &y) in ca.iter().zip(cb) {
-            // i16 differences square into i32 pairs: one pmaddwd per 8 bytes.
-            let d = i16::from(x) - i16::from(y);
+            // |x - y| fits a byte; widened to i16 its squares pair up into i32 (pmaddwd).
+            let d = i16::from(x.abs_diff(y));
             s += i32::from(d) * i32::from(d);
         }
         acc += s as u32;
