@@ -421,6 +421,8 @@ fn empty_sets_match_nothing() {
     assert!(match_descriptor_sets(&d[..1], &d[1..], &nan).len() <= 1);
 }
 
+// proptest is a native-only dev-dependency (its fork support does not build for wasm32).
+#[cfg(not(target_arch = "wasm32"))]
 mod props {
     use super::*;
     use proptest::prelude::{any, prop_assert, prop_assert_eq, proptest, ProptestConfig};
