@@ -1,8 +1,13 @@
 //! SIFT keypoints and descriptors (Lowe 2004), a port of OpenCV 4.x's `cv::SIFT`.
 //!
 //! The tracker's shape-context variant and the offline re-linker match SIFT keypoints between
-//! two appearances of a shape. [`detect_and_compute`] runs on a detection's grey crop, keeping
-//! only keypoints inside its mask; [`match_descriptors`] pairs them with Lowe's ratio test.
+//! two appearances of a shape. [`detect_in_region`] runs on a detection's region of a frame,
+//! keeping only keypoints inside its mask ([`detect_and_compute`] does the same on any grey
+//! image); [`match_descriptors`] pairs two shapes' features with Lowe's ratio test.
+//!
+//! Cost grows with the region's area (about 4× per doubling of its side, with OpenCV's default
+//! upsampling): for per-frame use, bound it with [`SiftConfig::max_side`] and consider
+//! `upsample: false` (about half the time on 128–256 px crops, fewer small-scale keypoints).
 //!
 //! The pipeline and its constants are OpenCV's float path (`sift.dispatch.cpp` /
 //! `sift.simd.hpp` with `DoG_TYPE_SHORT 0`): input optionally upsampled 2× (bilinear), Gaussian
@@ -32,8 +37,10 @@ mod detect;
 mod matching;
 mod scale_space;
 
-use image::GrayImage;
+use image::{GrayImage, Luma};
 use thiserror::Error;
+
+use crate::frame::{BBox, Frame, Mask};
 
 use descriptor::{calc_descriptor, quantize, DESCR_LEN};
 use detect::{find_scale_space_extrema, DetectParams, RawKeypoint};
@@ -276,7 +283,9 @@ pub fn detect_and_compute_f32(
     mask: Option<&GrayImage>,
     cfg: &SiftConfig,
 ) -> Result<SiftFeatures, SiftError> {
-    let expected = width as usize * height as usize;
+    let expected = (width as usize)
+        .checked_mul(height as usize)
+        .unwrap_or(usize::MAX);
     if pixels.len() != expected {
         return Err(SiftError::BufferSize {
             len: pixels.len(),
@@ -294,6 +303,32 @@ pub fn detect_and_compute_f32(
         data: pixels.to_vec(),
     };
     run(plane, width, height, mask, cfg)
+}
+
+/// SIFT features of one region of a frame, in frame coordinates: what the tracker computes per
+/// detection. The frame is cropped to `region` (clipped to the frame) and converted to grey
+/// (BT.601); with `mask`, only keypoints on its foreground pixels are kept. `cfg.max_side`
+/// bounds the cost of large regions. A region outside the frame gives no features.
+pub fn detect_in_region(
+    frame: &Frame<'_>,
+    region: &BBox,
+    mask: Option<&Mask>,
+    cfg: &SiftConfig,
+) -> Result<SiftFeatures, SiftError> {
+    let Some(((x0, y0, w, h), crop)) = frame.gray_crop(region) else {
+        return Ok(SiftFeatures::default());
+    };
+    let mask_crop = mask.map(|m| {
+        GrayImage::from_fn(w, h, |x, y| {
+            Luma([u8::from(m.get((x0 + x) as i32, (y0 + y) as i32)) * 255])
+        })
+    });
+    let mut feats = detect_and_compute(&crop, mask_crop.as_ref(), cfg)?;
+    for k in &mut feats.keypoints {
+        k.x += x0 as f32;
+        k.y += y0 as f32;
+    }
+    Ok(feats)
 }
 
 /// Matches descriptors of `query` against `train` (brute-force L2, ratio test, optional cross

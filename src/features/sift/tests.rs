@@ -318,6 +318,46 @@ fn max_side_downscales_and_maps_back_to_input_coordinates() {
 }
 
 #[test]
+fn region_of_a_frame_gives_frame_coordinates() {
+    use crate::frame::{BBox, Frame, Mask, PixelFormat};
+    // A 200x150 RGB frame holding a textured patch at (60, 40).
+    let patch = texture(80, 64, 21, 50);
+    let (fw, fh) = (200u32, 150u32);
+    let mut rgb = vec![128u8; (fw * fh * 3) as usize];
+    for (x, y, p) in patch.enumerate_pixels() {
+        let i = (((y + 40) * fw + x + 60) * 3) as usize;
+        rgb[i..i + 3].copy_from_slice(&[p.0[0]; 3]);
+    }
+    let frame = Frame::new(&rgb, fw, fh, (fw * 3) as usize, PixelFormat::Rgb8).unwrap();
+    let region = BBox::new(60.0, 40.0, 80.0, 64.0);
+    let cfg = SiftConfig::default();
+    let f = detect_in_region(&frame, &region, None, &cfg).unwrap();
+    let direct = detect_and_compute(&patch, None, &cfg).unwrap();
+    assert!(!f.is_empty());
+    assert_eq!(f.len(), direct.len());
+    for (a, b) in f.keypoints.iter().zip(&direct.keypoints) {
+        assert!((a.x - b.x - 60.0).abs() < 1e-4 && (a.y - b.y - 40.0).abs() < 1e-4);
+    }
+    assert_eq!(f.descriptors, direct.descriptors);
+    // A mask over the region's left half (in frame coordinates) keeps the keypoints there.
+    let half: Vec<u8> = (0..64 * 40).map(|_| 1).collect();
+    let mask = Mask::new(60, 40, 40, 64, half).unwrap();
+    let fm = detect_in_region(&frame, &region, Some(&mask), &cfg).unwrap();
+    let expected: Vec<_> = f
+        .keypoints
+        .iter()
+        .filter(|k| k.x < 100.0)
+        .copied()
+        .collect();
+    assert_eq!(fm.keypoints, expected);
+    // A region outside the frame has no features.
+    let outside = BBox::new(500.0, 500.0, 10.0, 10.0);
+    assert!(detect_in_region(&frame, &outside, None, &cfg)
+        .unwrap()
+        .is_empty());
+}
+
+#[test]
 fn no_upsampling_mode_works() {
     let img = gaussian_blob(96, 48.0, 4.0);
     let cfg = SiftConfig {
