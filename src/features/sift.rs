@@ -283,9 +283,7 @@ pub fn detect_and_compute_f32(
     mask: Option<&GrayImage>,
     cfg: &SiftConfig,
 ) -> Result<SiftFeatures, SiftError> {
-    let expected = (width as usize)
-        .checked_mul(height as usize)
-        .unwrap_or(usize::MAX);
+    let expected = (width as usize).saturating_mul(height as usize);
     if pixels.len() != expected {
         return Err(SiftError::BufferSize {
             len: pixels.len(),
