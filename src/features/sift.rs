@@ -38,6 +38,7 @@ mod matching;
 mod scale_space;
 
 use image::{GrayImage, Luma};
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::frame::{BBox, Frame, Mask};
@@ -101,8 +102,10 @@ pub enum SiftError {
     },
 }
 
-/// Detector settings. `Default` gives OpenCV's `SIFT::create()` defaults and no size bound.
-#[derive(Debug, Clone, PartialEq)]
+/// Detector settings. `Default` gives OpenCV's `SIFT::create()` defaults and no size bound;
+/// missing fields deserialise to their defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct SiftConfig {
     /// Layers per octave in which extrema are sought (OpenCV `nOctaveLayers`). Default 3;
     /// accepted 1..=8.
@@ -183,7 +186,7 @@ impl SiftConfig {
 }
 
 /// A SIFT keypoint in input-image coordinates.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Keypoint {
     /// Column of the centre, in pixels (pixel `i` spans `[i, i+1)`).
     pub x: f32,
@@ -223,8 +226,9 @@ impl SiftFeatures {
     }
 }
 
-/// Matching settings.
-#[derive(Debug, Clone, PartialEq)]
+/// Matching settings (missing fields deserialise to their defaults).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct MatchConfig {
     /// Lowe's ratio: a match is kept when its distance is below `ratio` × the distance to the
     /// second nearest train descriptor. Default 0.8 (Lowe 2004). Values ≥ 1 disable the test
@@ -245,7 +249,7 @@ impl Default for MatchConfig {
 }
 
 /// A match between descriptor `query` of the first set and `train` of the second.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SiftMatch {
     /// Index in the query (first) set.
     pub query: usize,

@@ -450,6 +450,21 @@ fn bad_input_is_a_typed_error() {
 }
 
 #[test]
+fn configs_deserialise_with_defaults() {
+    let c: SiftConfig = serde_json::from_str(r#"{"max_side": 128, "upsample": false}"#).unwrap();
+    assert_eq!(
+        c,
+        SiftConfig {
+            max_side: Some(128),
+            upsample: false,
+            ..SiftConfig::default()
+        }
+    );
+    let m: MatchConfig = serde_json::from_str("{}").unwrap();
+    assert_eq!(m, MatchConfig::default());
+}
+
+#[test]
 fn empty_sets_match_nothing() {
     let d = [[7u8; 128]; 3];
     assert!(match_descriptor_sets(&[], &d, &MatchConfig::default()).is_empty());
