@@ -182,12 +182,20 @@ pub(crate) fn find_scale_space_extrema(
 /// them (when negative). Ties count as extrema, as in OpenCV.
 #[inline]
 fn is_extremum(val: f32, rows: &[&[f32]; 9], c: usize) -> bool {
+    // The same-row neighbours first: they reject most pixels before the other 24 are read.
+    let centre = rows[4];
     if val > 0.0 {
-        rows.iter()
-            .all(|row| val >= row[c - 1] && val >= row[c] && val >= row[c + 1])
+        val >= centre[c - 1]
+            && val >= centre[c + 1]
+            && rows
+                .iter()
+                .all(|row| val >= row[c - 1] && val >= row[c] && val >= row[c + 1])
     } else {
-        rows.iter()
-            .all(|row| val <= row[c - 1] && val <= row[c] && val <= row[c + 1])
+        val <= centre[c - 1]
+            && val <= centre[c + 1]
+            && rows
+                .iter()
+                .all(|row| val <= row[c - 1] && val <= row[c] && val <= row[c + 1])
     }
 }
 
