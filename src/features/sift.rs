@@ -409,7 +409,10 @@ fn detect_float(
     let n_layers = cfg.n_octave_layers as usize;
     let base = initial_image(&work, cfg.upsample, cfg.sigma);
     let min_side = base.w.min(base.h) as f64;
-    let n_octaves = ((min_side.log2() - 2.0).round_ties_even() as i64).max(0) as usize;
+    // OpenCV's octave count; its last octave is only ~4 px wide, too small for any extremum
+    // (5 px border), but it is kept so the pyramids are OpenCV's.
+    let n_octaves = ((min_side.log2() - 2.0).round_ties_even() as i64 - i64::from(first_octave))
+        .max(0) as usize;
     if n_octaves == 0 {
         return Ok((Vec::new(), Vec::new()));
     }
