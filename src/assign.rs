@@ -260,7 +260,11 @@ pub fn solve(matrix: &CostMatrix, policy: Unmatched) -> Result<Assignment, Assig
             if let Some(cost) = matrix.get(r, c) {
                 row_used[r] = true;
                 col_used[c] = true;
-                out.matches.push(Match { row: r, col: c, cost });
+                out.matches.push(Match {
+                    row: r,
+                    col: c,
+                    cost,
+                });
             }
         }
     }
@@ -505,9 +509,15 @@ mod tests {
         assert_eq!(a.unmatched_cols, vec![0, 1, 2, 3]);
         let m = CostMatrix::from_fn(1, 3, |_, c| Some([3.0, 1.0, 2.0][c])).unwrap();
         let a = solve(&m, Unmatched::MaxMatches).unwrap();
-        assert_eq!((a.matches[0].col, a.unmatched_cols.clone()), (1, vec![0, 2]));
+        assert_eq!(
+            (a.matches[0].col, a.unmatched_cols.clone()),
+            (1, vec![0, 2])
+        );
         let m = CostMatrix::from_fn(3, 1, |r, _| Some([3.0, 1.0, 2.0][r])).unwrap();
         let a = solve(&m, Unmatched::MaxMatches).unwrap();
-        assert_eq!((a.matches[0].row, a.unmatched_rows.clone()), (1, vec![0, 2]));
+        assert_eq!(
+            (a.matches[0].row, a.unmatched_rows.clone()),
+            (1, vec![0, 2])
+        );
     }
 }

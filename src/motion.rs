@@ -94,6 +94,12 @@ pub trait MotionModel {
 
     /// The velocity of the tracked point (pixels per time step of the filter).
     fn velocity(&self) -> Point;
+
+    /// Multiplies the velocity state by `factor`; used on tracks unseen for a while, whose
+    /// stale velocity would carry the prediction away. Filters without one ignore it.
+    fn damp_velocity(&mut self, factor: f64) {
+        let _ = factor;
+    }
 }
 
 /// Builds a filter for a new track from its first measurement.
@@ -238,17 +244,6 @@ impl BoxKalman {
         )
     }
 
-    /// Multiplies every velocity by `factor` (ignored when not finite). Used on tracks that
-    /// have not been seen for a while: a stale velocity carries the prediction away from where
-    /// a stopped or turning object reappears.
-    pub fn damp_velocity(&mut self, factor: f64) {
-        if factor.is_finite() {
-            for i in 4..8 {
-                self.x[i] *= factor;
-            }
-        }
-    }
-
     /// Innovation `z - Hx` and its covariance `S = H P Hᵀ + R`.
     fn innovation(&self, m: &V4) -> (V4, M4) {
         let y = m - self.x.fixed_rows::<4>(0);
@@ -291,7 +286,9 @@ impl MotionModel for BoxKalman {
         }
         self.p.fixed_view_mut::<4, 4>(0, 0).copy_from(&na);
         self.p.fixed_view_mut::<4, 4>(0, 4).copy_from(&nb);
-        self.p.fixed_view_mut::<4, 4>(4, 0).copy_from(&nb.transpose());
+        self.p
+            .fixed_view_mut::<4, 4>(4, 0)
+            .copy_from(&nb.transpose());
         self.p.fixed_view_mut::<4, 4>(4, 4).copy_from(&nc);
     }
 
@@ -327,6 +324,14 @@ impl MotionModel for BoxKalman {
     fn velocity(&self) -> Point {
         Point::new(self.x[4], self.x[5])
     }
+
+    fn damp_velocity(&mut self, factor: f64) {
+        if factor.is_finite() {
+            for i in 4..8 {
+                self.x[i] *= factor;
+            }
+        }
+    }
 }
 
 /// 95 % quantile of the χ² distribution with 4 degrees of freedom: the usual Mahalanobis gate
@@ -359,7 +364,12 @@ impl ConstantAcceleration {
 
     /// A filter at `position` moving with `velocity` (pixels per second) under the constant
     /// control acceleration `accel` (pixels per second²), stepping `Δt = 1/fps`.
-    pub fn new(position: Point, velocity: Point, accel: Point, fps: f64) -> Result<Self, MotionError> {
+    pub fn new(
+        position: Point,
+        velocity: Point,
+        accel: Point,
+        fps: f64,
+    ) -> Result<Self, MotionError> {
         if !(fps.is_finite() && fps > 0.0) {
             return Err(MotionError::InvalidParameter {
                 name: "fps",
@@ -367,7 +377,11 @@ impl ConstantAcceleration {
                 reason: "must be finite and > 0",
             });
         }
-        for (what, p) in [("position", position), ("velocity", velocity), ("acceleration", accel)] {
+        for (what, p) in [
+            ("position", position),
+            ("velocity", velocity),
+            ("acceleration", accel),
+        ] {
             for v in [p.x, p.y] {
                 if !v.is_finite() {
                     return Err(MotionError::NonFinite { what, value: v });
@@ -586,10 +600,16 @@ mod tests {
                 .unwrap();
         }
         let v = kf.velocity();
-        assert!((v.x - 3.0).abs() < 0.05 && (v.y + 2.0).abs() < 0.05, "{v:?}");
+        assert!(
+            (v.x - 3.0).abs() < 0.05 && (v.y + 2.0).abs() < 0.05,
+            "{v:?}"
+        );
         kf.predict();
         let b = kf.project();
-        assert!((b.x - 180.0).abs() < 0.5 && (b.y + 120.0).abs() < 0.5, "{b:?}");
+        assert!(
+            (b.x - 180.0).abs() < 0.5 && (b.y + 120.0).abs() < 0.5,
+            "{b:?}"
+        );
     }
 
     #[test]
@@ -653,7 +673,10 @@ mod tests {
             let t = (k + 1) as f64 / fps;
             let sx = p0.x + u.x * t + 0.5 * a.x * t * t;
             let sy = p0.y + u.y * t + 0.5 * a.y * t * t;
-            assert!(close(p.x, sx) && close(p.y, sy), "step {k}: {p:?} vs ({sx}, {sy})");
+            assert!(
+                close(p.x, sx) && close(p.y, sy),
+                "step {k}: {p:?} vs ({sx}, {sy})"
+            );
         }
         // The rollout leaves the filter itself untouched.
         assert_eq!(f.state(), [100.0, 50.0, 12.0, -4.0]);
@@ -670,9 +693,13 @@ mod tests {
         // fps = 1 (Δt = 1), P₀ = R = 0.5 I, a = 0. After predict:
         // P = A P Aᵀ: for u: [[0.5 + 0.5, 0.5], [0.5, 0.5]] = [[1, .5], [.5, .5]].
         // S = 1 + 0.5 = 1.5, K = [1/1.5, 0.5/1.5] = [2/3, 1/3].
-        let mut f =
-            ConstantAcceleration::new(Point::new(0.0, 0.0), Point::new(1.0, 0.0), Point::default(), 1.0)
-                .unwrap();
+        let mut f = ConstantAcceleration::new(
+            Point::new(0.0, 0.0),
+            Point::new(1.0, 0.0),
+            Point::default(),
+            1.0,
+        )
+        .unwrap();
         f.predict();
         assert_eq!(f.project(), Point::new(1.0, 0.0));
         let p = f.covariance();
