@@ -111,6 +111,25 @@ impl Default for Terms {
 }
 
 impl Terms {
+    /// Default terms of the re-identification stage: centre distance and size, and appearance.
+    pub fn reid_default() -> Self {
+        Self {
+            iou: TermConfig::weighted(0.0),
+            centre: TermConfig {
+                weight: 1.0,
+                gate: None,
+                scale: 1.0,
+            },
+            size: TermConfig {
+                weight: 0.5,
+                gate: None,
+                scale: 1.0,
+            },
+            mask_iou: TermConfig::weighted(0.0),
+            ..Self::default()
+        }
+    }
+
     /// Every term with its name, in a fixed order.
     pub fn named(&self) -> [(&'static str, &TermConfig); 9] {
         [
@@ -170,8 +189,19 @@ pub struct Config {
     /// Velocity of a lost track is multiplied by this every frame it stays lost, so a long-lost
     /// track's prediction does not drift away from where a stopped person reappears.
     pub lost_velocity_decay: f64,
-    /// The pair-cost terms.
+    /// Match lost tracks only after the tracks seen in the previous frame have taken their
+    /// detections (DeepSORT's matching cascade, in two levels). Without it, lost and active
+    /// tracks compete for the high detections in one assignment.
+    pub lost_second: bool,
+    /// The pair-cost terms of the main association.
     pub terms: Terms,
+    /// The pair-cost terms of the re-identification stage: lost tracks × detections nobody else
+    /// took, before those start new tracks. IoU with a long-extrapolated box is a poor guide,
+    /// so by default this stage compares centre distance and size, plus appearance when
+    /// available. All weights 0 disables the stage.
+    pub reid_terms: Terms,
+    /// Highest combined re-identification cost accepted.
+    pub reid_max_cost: f64,
     /// Noise of the constant-velocity box Kalman filter.
     pub motion: BoxKalmanParams,
 }
@@ -193,7 +223,10 @@ impl Default for Config {
             max_cost_tentative: 0.7,
             unmatched_cost: None,
             lost_velocity_decay: 1.0,
+            lost_second: false,
             terms: Terms::default(),
+            reid_terms: Terms::reid_default(),
+            reid_max_cost: 0.5,
             motion: BoxKalmanParams::default(),
         }
     }
@@ -249,7 +282,14 @@ impl Config {
             (0.0..=1.0).contains(&d),
             "must be in [0, 1]",
         )?;
-        for (name, t) in self.terms.named() {
+        let r = self.reid_max_cost;
+        check("reid_max_cost", r, r >= 0.0, "must be ≥ 0")?;
+        for (name, t) in self
+            .terms
+            .named()
+            .into_iter()
+            .chain(self.reid_terms.named())
+        {
             let w = t.weight;
             check(&format!("terms.{name}.weight"), w, w >= 0.0, "must be ≥ 0")?;
             let s = t.scale;

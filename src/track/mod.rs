@@ -6,6 +6,7 @@
 //!   renormalised combination (thesis eq. 39 generalised).
 //! - [`regions`]: [`estimate_regions`], which pairs are worth scoring at all (thesis Alg. 2).
 //! - [`online`]: [`Tracker`] and its `update` phases.
+//! - [`sequence`]: whole-sequence helpers (records in, records out).
 //!
 //! A track's lifecycle: **tentative** (born from an unmatched confident detection) →
 //! **confirmed** after [`Config::min_hits`] matches → **lost** when a frame passes without a
@@ -17,6 +18,7 @@ pub mod config;
 pub mod cost;
 pub mod online;
 pub mod regions;
+pub mod sequence;
 mod track;
 
 pub use config::{Config, TermConfig, Terms};
@@ -26,6 +28,7 @@ pub use cost::{
 };
 pub use online::{BoxFeatures, FeatureExtractor, Features, MotionBuilder, Tracker};
 pub use regions::{estimate_regions, Cluster, Regions};
+pub use sequence::{detections_by_frame, to_records, track_sequence};
 pub use track::Track;
 
 use crate::assign::AssignError;

@@ -89,10 +89,23 @@ struct Pair {
     cost: f64,
 }
 
+/// The pair-cost matrices of one frame.
+struct Scores {
+    main: CostMatrix,
+    reid: Option<CostMatrix>,
+}
+
+/// Which tracks and detections the assignment stages have taken so far.
+struct Used {
+    tracks: Vec<bool>,
+    dets: Vec<bool>,
+}
+
 /// The online multi-object tracker. Owns its tracks and its id counter.
 pub struct Tracker {
     config: Config,
     costs: CostModel,
+    reid_costs: CostModel,
     extractor: Box<dyn FeatureExtractor>,
     motion: MotionBuilder,
     tracks: Vec<Track>,
@@ -105,6 +118,7 @@ impl std::fmt::Debug for Tracker {
         f.debug_struct("Tracker")
             .field("config", &self.config)
             .field("costs", &self.costs)
+            .field("reid_costs", &self.reid_costs)
             .field("tracks", &self.tracks)
             .field("frame", &self.frame)
             .field("next_id", &self.next_id)
@@ -123,6 +137,7 @@ impl Tracker {
         });
         Ok(Self {
             costs: CostModel::from_terms(&config.terms),
+            reid_costs: CostModel::from_terms(&config.reid_terms),
             config,
             extractor: Box::new(BoxFeatures),
             motion,
@@ -150,10 +165,16 @@ impl Tracker {
         self
     }
 
-    /// Adds a pair-cost term (e.g. shape context with `config.terms.shape_context.weight`).
-    /// A weight that is not positive disables it.
+    /// Adds a pair-cost term to the main association (e.g. shape context with
+    /// `config.terms.shape_context.weight`). A weight that is not positive disables it.
     pub fn add_term(&mut self, term: Box<dyn PairCost>, weight: f64, gate: Option<f64>) {
         self.costs.push(term, weight, gate);
+    }
+
+    /// Adds a pair-cost term to the re-identification stage (e.g. colour with
+    /// `config.reid_terms.colour.weight`). A weight that is not positive disables it.
+    pub fn add_reid_term(&mut self, term: Box<dyn PairCost>, weight: f64, gate: Option<f64>) {
+        self.reid_costs.push(term, weight, gate);
     }
 
     /// The configuration.
@@ -290,12 +311,9 @@ impl Tracker {
         estimate_regions(&shells, &det_shells)
     }
 
-    /// Phase 3: the combined cost of every candidate pair, as a tracks × detections matrix.
-    fn score_pairs(
-        &self,
-        regions: &Regions,
-        dets: &[Prepared<'_>],
-    ) -> Result<CostMatrix, TrackError> {
+    /// Phase 3: the combined cost of every candidate pair, as tracks × detections matrices:
+    /// the main association's, and the re-identification stage's (lost tracks only).
+    fn score_pairs(&self, regions: &Regions, dets: &[Prepared<'_>]) -> Result<Scores, TrackError> {
         let cands: Vec<Candidate<'_>> = dets
             .iter()
             .map(|d| Candidate {
@@ -304,60 +322,137 @@ impl Tracker {
                 features: Some(&d.features),
             })
             .collect();
-        let costs = self.costs.score(&self.tracks, &cands, regions);
-        let mut m = CostMatrix::new(self.tracks.len(), dets.len());
-        for (&(t, d), c) in regions.pairs.iter().zip(costs) {
-            if let Some(c) = c {
-                m.set(t, d, c)?;
+        // Tracks of different known classes never match (MOTS: cars are not pedestrians).
+        let same_class = |t: usize, d: usize| {
+            let (tc, dc) = (self.tracks[t].last.class, dets[d].det.class);
+            tc < 0 || dc < 0 || tc == dc
+        };
+        let fill = |model: &CostModel, regions: &Regions| -> Result<CostMatrix, TrackError> {
+            let mut m = CostMatrix::new(self.tracks.len(), dets.len());
+            for (&(t, d), c) in regions
+                .pairs
+                .iter()
+                .zip(model.score(&self.tracks, &cands, regions))
+            {
+                if let Some(c) = c.filter(|_| same_class(t, d)) {
+                    m.set(t, d, c)?;
+                }
             }
-        }
-        Ok(m)
+            Ok(m)
+        };
+        let main = fill(&self.costs, regions)?;
+        let reid = if self.reid_costs.terms().is_empty() {
+            None
+        } else {
+            let lost = |t: usize| self.tracks[t].state == TrackState::Lost;
+            let pairs: Vec<usize> = (0..regions.pairs.len())
+                .filter(|&k| lost(regions.pairs[k].0))
+                .collect();
+            let sub = Regions {
+                pairs: pairs.iter().map(|&k| regions.pairs[k]).collect(),
+                pair_cluster: pairs.iter().map(|&k| regions.pair_cluster[k]).collect(),
+                clusters: regions.clusters.clone(),
+            };
+            Some(fill(&self.reid_costs, &sub)?)
+        };
+        Ok(Scores { main, reid })
     }
 
-    /// Phase 4: the three assignment stages.
-    fn assign(&self, scores: &CostMatrix, dets: &[Prepared<'_>]) -> Result<Vec<Pair>, TrackError> {
+    /// Phase 4: the assignment stages (module docs).
+    fn assign(&self, scores: &Scores, dets: &[Prepared<'_>]) -> Result<Vec<Pair>, TrackError> {
         let cfg = &self.config;
-        let mut track_used = vec![false; self.tracks.len()];
-        let mut det_used = vec![false; dets.len()];
+        let mut used = Used {
+            tracks: vec![false; self.tracks.len()],
+            dets: vec![false; dets.len()],
+        };
         let mut out = Vec::new();
-
-        let active = |t: &Track| matches!(t.state, TrackState::Confirmed | TrackState::Lost);
         let recent = |t: &Track| t.state == TrackState::Confirmed;
+        let lost = |t: &Track| t.state == TrackState::Lost;
+        let active = |t: &Track| recent(t) || lost(t);
         let tentative = |t: &Track| t.state == TrackState::Tentative;
-        let stages: [(&dyn Fn(&Track) -> bool, bool, f64); 3] = [
-            (&active, true, cfg.max_cost),
-            (&recent, false, cfg.max_cost_low),
-            (&tentative, true, cfg.max_cost_tentative),
-        ];
-        for (track_ok, high, max_cost) in stages {
-            let rows: Vec<usize> = (0..self.tracks.len())
-                .filter(|&i| !track_used[i] && track_ok(&self.tracks[i]))
-                .collect();
-            let cols: Vec<usize> = (0..dets.len())
-                .filter(|&j| !det_used[j] && dets[j].high == high)
-                .collect();
-            if rows.is_empty() || cols.is_empty() {
-                continue;
-            }
-            let sub = CostMatrix::from_fn(rows.len(), cols.len(), |r, c| {
-                scores.get(rows[r], cols[c]).filter(|&v| v <= max_cost)
-            })?;
-            let policy = match cfg.unmatched_cost {
-                Some(l) => Unmatched::Cost(l),
-                None => Unmatched::MaxMatches,
-            };
-            for m in assign::solve(&sub, policy)?.matches {
-                let (t, d) = (rows[m.row], cols[m.col]);
-                track_used[t] = true;
-                det_used[d] = true;
-                out.push(Pair {
-                    track: t,
-                    det: d,
-                    cost: m.cost,
-                });
-            }
+        let high = |d: &Prepared<'_>| d.high;
+        let low = |d: &Prepared<'_>| !d.high;
+        let main = &scores.main;
+        if cfg.lost_second {
+            self.stage(
+                main,
+                &recent,
+                dets,
+                &high,
+                cfg.max_cost,
+                &mut used,
+                &mut out,
+            )?;
+            self.stage(main, &lost, dets, &high, cfg.max_cost, &mut used, &mut out)?;
+        } else {
+            self.stage(
+                main,
+                &active,
+                dets,
+                &high,
+                cfg.max_cost,
+                &mut used,
+                &mut out,
+            )?;
+        }
+        self.stage(
+            main,
+            &recent,
+            dets,
+            &low,
+            cfg.max_cost_low,
+            &mut used,
+            &mut out,
+        )?;
+        let max_t = cfg.max_cost_tentative;
+        self.stage(main, &tentative, dets, &high, max_t, &mut used, &mut out)?;
+        if let Some(reid) = &scores.reid {
+            let max_r = cfg.reid_max_cost;
+            self.stage(reid, &lost, dets, &high, max_r, &mut used, &mut out)?;
         }
         Ok(out)
+    }
+
+    /// One assignment stage: the unused tracks and detections that pass the filters, pairs
+    /// costing at most `max_cost`, solved optimally.
+    #[allow(clippy::too_many_arguments)]
+    fn stage(
+        &self,
+        scores: &CostMatrix,
+        track_ok: &dyn Fn(&Track) -> bool,
+        dets: &[Prepared<'_>],
+        det_ok: &dyn Fn(&Prepared<'_>) -> bool,
+        max_cost: f64,
+        used: &mut Used,
+        out: &mut Vec<Pair>,
+    ) -> Result<(), TrackError> {
+        let rows: Vec<usize> = (0..self.tracks.len())
+            .filter(|&i| !used.tracks[i] && track_ok(&self.tracks[i]))
+            .collect();
+        let cols: Vec<usize> = (0..dets.len())
+            .filter(|&j| !used.dets[j] && det_ok(&dets[j]))
+            .collect();
+        if rows.is_empty() || cols.is_empty() {
+            return Ok(());
+        }
+        let sub = CostMatrix::from_fn(rows.len(), cols.len(), |r, c| {
+            scores.get(rows[r], cols[c]).filter(|&v| v <= max_cost)
+        })?;
+        let policy = match self.config.unmatched_cost {
+            Some(l) => Unmatched::Cost(l),
+            None => Unmatched::MaxMatches,
+        };
+        for m in assign::solve(&sub, policy)?.matches {
+            let (t, d) = (rows[m.row], cols[m.col]);
+            used.tracks[t] = true;
+            used.dets[d] = true;
+            out.push(Pair {
+                track: t,
+                det: d,
+                cost: m.cost,
+            });
+        }
+        Ok(())
     }
 
     /// Phase 5: correct the matched tracks, confirm and re-identify. Returns which tracks were

@@ -4,10 +4,10 @@
 //! txt (space-separated, six fields, the sixth an RLE mask), told apart by the first line.
 //! Frames, when given, are decoded lazily one at a time from the image folder.
 
-use shapetrack::frame::{Detection, Frame, Mask, TrackedShape};
+use shapetrack::frame::{Frame, Mask, TrackedShape};
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mot, write_mots, SeqInfo};
-use shapetrack::io::{read_text, write_text, IoError, Record};
-use shapetrack::track::{Config, Tracker};
+use shapetrack::io::{read_text, write_text, IoError};
+use shapetrack::track::{detections_by_frame, to_records, Config, Tracker};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -130,22 +130,7 @@ pub fn run(args: Args) -> crate::CliResult {
         Some(s) => s.seq_length.max(last_frame + 1 - first_frame),
         None => last_frame + 1 - first_frame,
     };
-    let mut per_frame: Vec<Vec<Detection>> = vec![Vec::new(); num_frames as usize];
-    for r in &records {
-        let det = match r.mask_bitmap() {
-            Some(m) => Detection {
-                class: r.class,
-                ..Detection::from_mask(m, r.score)
-            },
-            None => Detection {
-                class: r.class,
-                ..Detection::from_box(r.bbox, r.score)
-            },
-        };
-        if let Some(v) = per_frame.get_mut((r.frame - first_frame) as usize) {
-            v.push(det);
-        }
-    }
+    let per_frame = detections_by_frame(&records, first_frame, num_frames);
 
     let image_size = seqinfo
         .as_ref()
@@ -176,15 +161,15 @@ pub fn run(args: Args) -> crate::CliResult {
     }
 
     let format = args.format.unwrap_or(Format::Mot);
-    let mut out_records: Vec<Record> = Vec::with_capacity(shapes.len());
-    for s in &mut shapes {
-        s.frame = s.frame - 1 + first_frame;
-        if format == Format::Mots && s.mask.is_none() {
-            // Boxes are the degenerate case of masks: write the box as a filled mask.
-            s.mask = Some(Mask::from_bbox(&s.bbox));
+    if format == Format::Mots {
+        for s in &mut shapes {
+            if s.mask.is_none() {
+                // Boxes are the degenerate case of masks: write the box as a filled mask.
+                s.mask = Some(Mask::from_bbox(&s.bbox));
+            }
         }
-        out_records.push(Record::from_tracked(s, image_size));
     }
+    let out_records = to_records(&shapes, first_frame, image_size);
     let body = match format {
         Format::Mot => write_mot(&out_records),
         Format::Mots => {
