@@ -56,6 +56,9 @@ pub struct Terms {
     /// boxes are grown by `(scale − 1)/2` of their size on each side before the IoU (C-BIoU),
     /// which keeps fast or low-frame-rate motion overlapping; 1 = plain IoU.
     pub iou: TermConfig,
+    /// `1 − IoU` between the track's last observed box and the detection (OC-SORT's
+    /// observation-centric recovery): finds a lost track where it was last seen.
+    pub last_iou: TermConfig,
     /// `(1 − GIoU)/2` between the predicted box and the detection: like IoU, but still graded
     /// when the boxes do not overlap.
     pub giou: TermConfig,
@@ -86,6 +89,7 @@ impl Default for Terms {
                 gate: None,
                 scale: 1.0,
             },
+            last_iou: TermConfig::weighted(0.0),
             giou: TermConfig::weighted(0.0),
             centre: TermConfig {
                 weight: 0.0,
@@ -131,9 +135,10 @@ impl Terms {
     }
 
     /// Every term with its name, in a fixed order.
-    pub fn named(&self) -> [(&'static str, &TermConfig); 9] {
+    pub fn named(&self) -> [(&'static str, &TermConfig); 10] {
         [
             ("iou", &self.iou),
+            ("last_iou", &self.last_iou),
             ("giou", &self.giou),
             ("centre", &self.centre),
             ("size", &self.size),
@@ -159,6 +164,10 @@ pub struct Config {
     pub high_score: f64,
     /// Score an unmatched detection needs to start a new (tentative) track.
     pub new_track_score: f64,
+    /// An unmatched detection overlapping a detection matched this frame by more than this IoU
+    /// does not start a track: it is most likely a duplicate box on an already tracked object.
+    /// 1 disables the check.
+    pub spawn_max_iou: f64,
     /// Matches a tentative track needs to be confirmed (and get an id). 1 confirms at birth.
     pub min_hits: u32,
     /// Frames a tentative track may go unmatched before it is dropped (0: its first miss).
@@ -212,6 +221,7 @@ impl Default for Config {
             min_score: 0.0,
             high_score: 0.6,
             new_track_score: 0.7,
+            spawn_max_iou: 1.0,
             min_hits: 3,
             max_tentative_misses: 0,
             max_lost: 30,

@@ -12,9 +12,9 @@
 //! "within the cluster") say so with [`PairCost::normalise_in_cluster`]; their costs are then
 //! divided by the largest cost in the pair's region cluster before combining.
 
+use super::lifecycle::Track;
 use super::online::Features;
 use super::regions::Regions;
-use super::track::Track;
 use super::Terms;
 use crate::frame::{BBox, Detection};
 
@@ -69,6 +69,21 @@ impl PairCost for IouCost {
         let a = buffered(&track.predicted_box(), self.buffer);
         let b = buffered(&det.detection.bbox, self.buffer);
         Some(1.0 - a.iou(&b))
+    }
+}
+
+/// `1 − IoU` between the track's last *observed* box (not its prediction) and the detection:
+/// OC-SORT's observation-centric recovery. A track lost while its prediction drifted away can
+/// still be found where it was last seen.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LastIouCost;
+
+impl PairCost for LastIouCost {
+    fn name(&self) -> &str {
+        "last_iou"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        Some(1.0 - track.last_detection().bbox.iou(&det.detection.bbox))
     }
 }
 
@@ -223,6 +238,7 @@ impl CostModel {
             t.iou.weight,
             t.iou.gate,
         );
+        m.push(Box::new(LastIouCost), t.last_iou.weight, t.last_iou.gate);
         m.push(Box::new(GiouCost), t.giou.weight, t.giou.gate);
         m.push(
             Box::new(CentreDistanceCost {

@@ -16,20 +16,20 @@
 
 pub mod config;
 pub mod cost;
+mod lifecycle;
 pub mod online;
 pub mod regions;
 pub mod sequence;
-mod track;
 
 pub use config::{Config, TermConfig, Terms};
 pub use cost::{
-    Candidate, CentreDistanceCost, CostModel, GiouCost, IouCost, MahalanobisCost, MaskIouCost,
-    PairCost, SizeCost, WeightedTerm,
+    Candidate, CentreDistanceCost, CostModel, GiouCost, IouCost, LastIouCost, MahalanobisCost,
+    MaskIouCost, PairCost, SizeCost, WeightedTerm,
 };
+pub use lifecycle::Track;
 pub use online::{BoxFeatures, FeatureExtractor, Features, MotionBuilder, Tracker};
 pub use regions::{estimate_regions, Cluster, Regions};
 pub use sequence::{detections_by_frame, to_records, track_sequence};
-pub use track::Track;
 
 use crate::assign::AssignError;
 use crate::motion::MotionError;

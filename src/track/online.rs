@@ -28,8 +28,8 @@
 
 use super::config::Config;
 use super::cost::{Candidate, CostModel, PairCost};
+use super::lifecycle::{BoxMotion, Track};
 use super::regions::{estimate_regions, Regions};
-use super::track::{BoxMotion, Track};
 use super::TrackError;
 use crate::assign::{self, CostMatrix, Unmatched};
 use crate::frame::{BBox, Detection, Frame, Point, TrackState, TrackedShape};
@@ -540,10 +540,19 @@ impl Tracker {
         det_used: &[bool],
         out: &mut Vec<TrackedShape>,
     ) -> Result<(), TrackError> {
+        let max_iou = self.config.spawn_max_iou;
+        let duplicate = |d: &Prepared<'_>| {
+            max_iou < 1.0
+                && dets
+                    .iter()
+                    .zip(det_used)
+                    .any(|(o, &used)| used && o.det.bbox.iou(&d.det.bbox) > max_iou)
+        };
         for (j, d) in dets.iter().enumerate() {
             if det_used.get(j).copied().unwrap_or(true)
                 || !d.high
                 || d.det.score < self.config.new_track_score
+                || duplicate(d)
             {
                 continue;
             }
