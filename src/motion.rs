@@ -102,10 +102,23 @@ pub trait MotionModel {
     }
 }
 
+/// A box filter that can be cloned behind a pointer: what a track owns, so the tracker can keep
+/// a snapshot of it (for the re-update after a gap). Every `Clone` box filter is one.
+pub trait BoxMotionModel: MotionModel<Measurement = BBox> + Send {
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn BoxMotionModel>;
+}
+
+impl<T: MotionModel<Measurement = BBox> + Clone + Send + 'static> BoxMotionModel for T {
+    fn clone_box(&self) -> Box<dyn BoxMotionModel> {
+        Box::new(self.clone())
+    }
+}
+
 /// Builds a filter for a new track from its first measurement.
 pub trait MotionFactory {
     /// The filter type it builds.
-    type Model: MotionModel<Measurement = BBox>;
+    type Model: MotionModel<Measurement = BBox> + Clone + Send + 'static;
 
     /// A filter whose state is the box `z` at rest.
     fn init(&self, z: &BBox) -> Result<Self::Model, MotionError>;

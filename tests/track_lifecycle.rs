@@ -290,3 +290,60 @@ fn mask_detections_track_and_classes_never_mix() {
     assert!(o.is_empty());
     assert_eq!(t.tracks()[0].state(), TrackState::Lost);
 }
+
+/// A track that stops while hidden: its prediction runs on, but the re-identification stage
+/// finds it where it was last seen (IoU with the last observed box).
+#[test]
+fn lost_track_that_stopped_is_reidentified_where_last_seen() {
+    let frames: Vec<Vec<Detection>> = (0..12)
+        .map(|k| match k {
+            0..=5 => vec![det(12.0 * k as f64, 0.0)],
+            6..=8 => vec![],
+            _ => vec![det(61.0, 0.0)],
+        })
+        .collect();
+    let mut with = Tracker::new(config()).unwrap();
+    let out = run(&mut with, &frames);
+    assert!(out.iter().all(|s| s.id == 1), "{:?}", ids(&out));
+    assert_eq!(out.len(), 9);
+
+    let mut off = config();
+    off.reid_terms.last_iou.weight = 0.0;
+    let mut without = Tracker::new(off).unwrap();
+    let out = run(&mut without, &frames);
+    // Without it the stopped object is a new track (reported once confirmed, 3 frames later).
+    let late: Vec<_> = out.iter().filter(|s| s.frame > 9).map(|s| s.id).collect();
+    assert_eq!(late, vec![2, 2, 2], "{:?}", ids(&out));
+}
+
+/// OC-SORT's re-update: after a gap the filter's velocity is the one the gap implies.
+#[test]
+fn reupdate_after_gap_restores_the_velocity() {
+    let frames: Vec<Vec<Detection>> = (0..14)
+        .map(|k| match k {
+            // Walks right at 4 px/frame, hidden for 4 frames, then walks at 8 px/frame.
+            0..=5 => vec![det(4.0 * k as f64, 0.0)],
+            6..=9 => vec![],
+            _ => vec![det(20.0 + 8.0 * (k - 5) as f64, 0.0)],
+        })
+        .collect();
+    let speed = |reupdate: bool| {
+        let mut t = Tracker::new(Config {
+            reupdate_after_gap: reupdate,
+            max_cost: 0.95,
+            ..config()
+        })
+        .unwrap();
+        let out = run(&mut t, &frames[..11]);
+        assert!(out.iter().all(|s| s.id == 1), "{:?}", ids(&out));
+        t.tracks()[0].motion().velocity().x
+    };
+    let (plain, reupdated) = (speed(false), speed(true));
+    // Over the gap it moved 40 px in 5 frames = 8 px/frame; the plain filter still believes
+    // in the old 4 px/frame much more.
+    assert!(
+        (reupdated - 8.0).abs() < (plain - 8.0).abs(),
+        "{plain} vs {reupdated}"
+    );
+    assert!((reupdated - 8.0).abs() < 1.5, "{reupdated}");
+}

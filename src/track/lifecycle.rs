@@ -2,16 +2,18 @@
 
 use super::online::Features;
 use crate::frame::{BBox, Detection, Point, TrackState, TrackedShape};
-use crate::motion::MotionModel;
+use crate::motion::{BoxMotionModel, MotionModel};
 
 /// The boxed motion filter a track owns (any [`MotionModel`] on boxes).
-pub(crate) type BoxMotion = Box<dyn MotionModel<Measurement = BBox> + Send>;
+pub(crate) type BoxMotion = Box<dyn BoxMotionModel>;
 
 /// One track. Pair-cost terms read it through the accessors; the tracker alone mutates it.
 pub struct Track {
     pub(crate) id: Option<u64>,
     pub(crate) state: TrackState,
     pub(crate) motion: BoxMotion,
+    /// The filter right after the last match, kept for the re-update after a gap.
+    pub(crate) snapshot: Option<BoxMotion>,
     /// Kalman prediction for the current frame (set by the predict phase).
     pub(crate) predicted: BBox,
     /// Frames matched, in total.

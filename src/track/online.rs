@@ -33,7 +33,7 @@ use super::regions::{estimate_regions, Regions};
 use super::TrackError;
 use crate::assign::{self, CostMatrix, Unmatched};
 use crate::frame::{BBox, Detection, Frame, Point, TrackState, TrackedShape};
-use crate::motion::{BoxKalman, MotionError, MotionFactory};
+use crate::motion::{BoxKalman, BoxMotionModel, MotionError, MotionFactory};
 
 /// Per-detection features, computed once per frame by a [`FeatureExtractor`] and kept on the
 /// track as its last appearance when the detection is matched.
@@ -151,7 +151,6 @@ impl Tracker {
     pub fn with_motion<F>(mut self, factory: F) -> Self
     where
         F: MotionFactory + Send + 'static,
-        F::Model: Send + 'static,
     {
         self.motion = Box::new(move |z: &BBox| -> Result<BoxMotion, MotionError> {
             Ok(Box::new(factory.init(z)?))
@@ -469,7 +468,15 @@ impl Tracker {
                 continue;
             };
             matched[m.track] = true;
+            if self.config.reupdate_after_gap && t.misses > 0 {
+                if let Some(snap) = &t.snapshot {
+                    t.motion = reupdate(snap.as_ref(), &t.last.bbox, &d.det.bbox, t.misses)?;
+                }
+            }
             t.motion.update(&d.det.bbox)?;
+            if self.config.reupdate_after_gap {
+                t.snapshot = Some(t.motion.clone_box());
+            }
             t.hits += 1;
             t.misses = 0;
             t.last_frame = self.frame;
@@ -561,6 +568,7 @@ impl Tracker {
                 id: None,
                 state: TrackState::Tentative,
                 predicted: d.det.bbox,
+                snapshot: self.config.reupdate_after_gap.then(|| motion.clone_box()),
                 motion,
                 hits: 1,
                 misses: 0,
@@ -583,6 +591,34 @@ impl Tracker {
         }
         Ok(())
     }
+}
+
+/// OC-SORT's observation-centric re-update: a track matched again after `misses` unmatched
+/// frames has a filter that drifted on predictions alone (its velocity and covariance are off).
+/// Restart from the snapshot taken at the last match and feed it virtual observations on the
+/// straight line from the last box to the new one, one per missed frame; the caller then
+/// applies the real update. The filter leaves the gap with the velocity the gap implies.
+fn reupdate(
+    snapshot: &dyn BoxMotionModel,
+    last: &BBox,
+    new: &BBox,
+    misses: u32,
+) -> Result<BoxMotion, MotionError> {
+    let mut m = snapshot.clone_box();
+    let n = misses as f64 + 1.0;
+    for i in 1..=misses {
+        let a = i as f64 / n;
+        let lerp = |p: f64, q: f64| p + (q - p) * a;
+        m.predict();
+        m.update(&BBox::new(
+            lerp(last.x, new.x),
+            lerp(last.y, new.y),
+            lerp(last.w, new.w),
+            lerp(last.h, new.h),
+        ))?;
+    }
+    m.predict();
+    Ok(m)
 }
 
 fn shape_of(frame: u32, id: u64, state: TrackState, d: &Prepared<'_>, cost: f64) -> TrackedShape {
