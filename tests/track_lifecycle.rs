@@ -1,5 +1,6 @@
 //! Track lifecycle, id ownership, input validation and cost-term plumbing of the online tracker.
 
+use proptest::prelude::*;
 use shapetrack::frame::{BBox, Detection, Mask, TrackState, TrackedShape};
 use shapetrack::track::{Candidate, Config, PairCost, Track, TrackError, Tracker};
 
@@ -191,6 +192,7 @@ fn invalid_detections_are_typed_errors() {
         (BBox::new(0.0, f64::INFINITY, 1.0, 1.0), 0.9, "bbox.y"),
         (BBox::new(0.0, 0.0, f64::NEG_INFINITY, 1.0), 0.9, "bbox.w"),
         (BBox::new(0.0, 0.0, 1.0, -2.0), 0.9, "bbox.h"),
+        (BBox::new(1e300, 0.0, 1.0, 1.0), 0.9, "bbox.x"),
         (BBox::new(0.0, 0.0, 1.0, 1.0), f64::NAN, "score"),
         (BBox::new(0.0, 0.0, 1.0, 1.0), f64::INFINITY, "score"),
     ];
@@ -346,4 +348,53 @@ fn reupdate_after_gap_restores_the_velocity() {
         "{plain} vs {reupdated}"
     );
     assert!((reupdated - 8.0).abs() < 1.5, "{reupdated}");
+}
+
+fn random_frames() -> impl Strategy<Value = Vec<Vec<Detection>>> {
+    let det = (
+        -50.0f64..700.0,
+        -50.0f64..500.0,
+        0.0f64..120.0,
+        0.0f64..200.0,
+        -1.0f64..2.0,
+    )
+        .prop_map(|(x, y, w, h, s)| Detection::from_box(BBox::new(x, y, w, h), s));
+    proptest::collection::vec(proptest::collection::vec(det, 0..12), 1..25)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// Any valid input: no panic, unique ids per frame, every reported box is one of that
+    /// frame's detections, frames in range, and the same input gives the same output.
+    #[test]
+    fn arbitrary_detections_give_well_formed_output(frames in random_frames(), min_hits in 1u32..4) {
+        let cfg = Config { min_hits, max_lost: 3, ..Config::default() };
+        let mut t = Tracker::new(cfg.clone()).unwrap();
+        let mut all = Vec::new();
+        for (k, dets) in frames.iter().enumerate() {
+            let out = t.update(None, dets).unwrap();
+            let mut seen = std::collections::HashSet::new();
+            for s in &out {
+                prop_assert!(s.frame >= 1 && s.frame as usize <= k + 1);
+                let src = &frames[s.frame as usize - 1];
+                let i = s.det_index.unwrap();
+                prop_assert_eq!(src[i].bbox, s.bbox);
+                prop_assert!(s.id >= 1 && s.id <= t.ids_issued());
+                prop_assert!(s.state == TrackState::Confirmed);
+                if s.frame as usize == k + 1 {
+                    prop_assert!(seen.insert(s.id), "id {} twice in frame {}", s.id, s.frame);
+                }
+            }
+            all.extend(out);
+        }
+        let mut per_frame = std::collections::HashSet::new();
+        for s in &all {
+            prop_assert!(per_frame.insert((s.frame, s.id)), "id {} twice in frame {}", s.id, s.frame);
+        }
+        let mut again = Tracker::new(cfg).unwrap();
+        let rerun: Vec<TrackedShape> =
+            frames.iter().flat_map(|d| again.update(None, d).unwrap()).collect();
+        prop_assert_eq!(rerun, all);
+    }
 }

@@ -73,6 +73,9 @@ impl FeatureExtractor for BoxFeatures {
 /// Builds a new track's motion filter from its first box.
 pub type MotionBuilder = Box<dyn Fn(&BBox) -> Result<BoxMotion, MotionError> + Send>;
 
+/// Largest box coordinate or size accepted (pixels): far beyond any image, far below overflow.
+const MAX_COORDINATE: f64 = 1e9;
+
 /// A detection that survived `prepare`.
 struct Prepared<'a> {
     index: usize,
@@ -238,12 +241,13 @@ impl Tracker {
                 ("bbox.w", b.w),
                 ("bbox.h", b.h),
             ] {
-                if !value.is_finite() {
+                // Finite is not enough: squaring 1e300 in an area or a covariance overflows.
+                if !(value.is_finite() && value.abs() <= MAX_COORDINATE) {
                     return Err(TrackError::InvalidDetection {
                         index,
                         field,
                         value,
-                        expected: "a finite number",
+                        expected: "a finite number within ±1e9",
                     });
                 }
             }
