@@ -215,49 +215,85 @@ impl Dsu {
 ///   `BIG = 2·(n+m)·(|λ| + |c_max| + |c_min|) + 1`, more than the all-unmatched solution costs,
 ///   so no optimum uses one.
 pub fn solve(matrix: &CostMatrix, policy: Unmatched) -> Result<Assignment, AssignError> {
+    let mut edges = Vec::new();
+    for r in 0..matrix.rows {
+        for c in 0..matrix.cols {
+            if let Some(v) = matrix.data[r * matrix.cols + c] {
+                edges.push((r, c, v));
+            }
+        }
+    }
+    solve_sparse(matrix.rows, matrix.cols, &edges, policy)
+}
+
+/// [`solve`] on a sparse problem: `rows × cols` with only the pairs in `edges`
+/// (`(row, col, cost)`) allowed; a pair listed twice keeps its last cost. Work is linear in the
+/// edges plus the dense solves of the connected components, so a tracker with hundreds of
+/// tracks but a handful of candidates each never touches an `n × m` matrix.
+pub fn solve_sparse(
+    rows: usize,
+    cols: usize,
+    edges: &[(usize, usize, f64)],
+    policy: Unmatched,
+) -> Result<Assignment, AssignError> {
     if let Unmatched::Cost(l) = policy {
         if !l.is_finite() {
             return Err(AssignError::BadUnmatchedCost { value: l });
         }
     }
-    let (nr, nc) = (matrix.rows, matrix.cols);
-    let mut dsu = Dsu((0..nr + nc).collect());
-    for r in 0..nr {
-        for c in 0..nc {
-            if matrix.data[r * nc + c].is_some() {
-                dsu.join(r, nr + c);
-            }
+    for &(row, col, value) in edges {
+        if row >= rows || col >= cols {
+            return Err(AssignError::OutOfRange {
+                row,
+                col,
+                rows,
+                cols,
+            });
+        }
+        if !value.is_finite() {
+            return Err(AssignError::NonFinite { row, col, value });
         }
     }
-    // Group rows and columns by component root, in index order.
-    let mut comp_of = vec![usize::MAX; nr + nc];
-    let mut comps: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
-    for i in 0..nr + nc {
-        let root = dsu.find(i);
-        if comp_of[root] == usize::MAX {
-            comp_of[root] = comps.len();
-            comps.push((Vec::new(), Vec::new()));
+    let mut dsu = Dsu((0..rows + cols).collect());
+    for &(r, c, _) in edges {
+        dsu.join(r, rows + c);
+    }
+    // Components in order of first appearance; local indices within each.
+    let mut comp_of_root = vec![usize::MAX; rows + cols];
+    let mut local = vec![usize::MAX; rows + cols];
+    let mut comps: Vec<(Vec<usize>, Vec<usize>, Vec<(usize, usize, f64)>)> = Vec::new();
+    for &(r, c, v) in edges {
+        let root = dsu.find(r);
+        if comp_of_root[root] == usize::MAX {
+            comp_of_root[root] = comps.len();
+            comps.push((Vec::new(), Vec::new(), Vec::new()));
         }
-        let k = comp_of[root];
-        if i < nr {
-            comps[k].0.push(i);
-        } else {
-            comps[k].1.push(i - nr);
+        let comp = &mut comps[comp_of_root[root]];
+        if local[r] == usize::MAX {
+            local[r] = comp.0.len();
+            comp.0.push(r);
         }
+        if local[rows + c] == usize::MAX {
+            local[rows + c] = comp.1.len();
+            comp.1.push(c);
+        }
+        comp.2.push((local[r], local[rows + c], v));
     }
     let mut out = Assignment::default();
-    let mut row_used = vec![false; nr];
-    let mut col_used = vec![false; nc];
-    for (rows, cols) in &comps {
-        if rows.is_empty() || cols.is_empty() {
-            continue;
+    let mut row_used = vec![false; rows];
+    let mut col_used = vec![false; cols];
+    for (crows, ccols, cedges) in &comps {
+        let mut m = CostMatrix::new(crows.len(), ccols.len());
+        for &(i, j, v) in cedges {
+            m.set(i, j, v)?;
         }
+        let (li, lj): (Vec<usize>, Vec<usize>) = ((0..m.rows).collect(), (0..m.cols).collect());
         let pairs = match policy {
-            Unmatched::MaxMatches => solve_max_matches(matrix, rows, cols)?,
-            Unmatched::Cost(l) => solve_with_unmatched_cost(matrix, rows, cols, l)?,
+            Unmatched::MaxMatches => solve_max_matches(&m, &li, &lj)?,
+            Unmatched::Cost(l) => solve_with_unmatched_cost(&m, &li, &lj, l)?,
         };
-        for (r, c) in pairs {
-            if let Some(cost) = matrix.get(r, c) {
+        for (i, j) in pairs {
+            if let (Some(cost), Some(&r), Some(&c)) = (m.get(i, j), crows.get(i), ccols.get(j)) {
                 row_used[r] = true;
                 col_used[c] = true;
                 out.matches.push(Match {
@@ -269,8 +305,8 @@ pub fn solve(matrix: &CostMatrix, policy: Unmatched) -> Result<Assignment, Assig
         }
     }
     out.matches.sort_by_key(|m| m.row);
-    out.unmatched_rows = (0..nr).filter(|&r| !row_used[r]).collect();
-    out.unmatched_cols = (0..nc).filter(|&c| !col_used[c]).collect();
+    out.unmatched_rows = (0..rows).filter(|&r| !row_used[r]).collect();
+    out.unmatched_cols = (0..cols).filter(|&c| !col_used[c]).collect();
     Ok(out)
 }
 
@@ -451,6 +487,27 @@ mod tests {
         }
 
         #[test]
+        fn sparse_equals_dense(m in matrix_strategy(), l in 0.0f64..12.0) {
+            let mut edges = Vec::new();
+            for r in 0..m.rows() {
+                for c in 0..m.cols() {
+                    if let Some(v) = m.get(r, c) {
+                        // Listed twice: the last cost counts.
+                        edges.push((r, c, v + 100.0));
+                        edges.push((r, c, v));
+                    }
+                }
+            }
+            for policy in [Unmatched::MaxMatches, Unmatched::Cost(l)] {
+                let sparse = solve_sparse(m.rows(), m.cols(), &edges, policy).unwrap();
+                check_valid(&m, &sparse);
+                let dense = solve(&m, policy).unwrap();
+                prop_assert!((sparse.total_cost() - dense.total_cost()).abs() < 1e-9);
+                prop_assert_eq!(sparse.matches.len(), dense.matches.len());
+            }
+        }
+
+        #[test]
         fn unmatched_cost_is_optimal(m in matrix_strategy(), l in -1.0f64..12.0) {
             let a = solve(&m, Unmatched::Cost(l)).unwrap();
             check_valid(&m, &a);
@@ -498,6 +555,14 @@ mod tests {
             Err(AssignError::OutOfRange { .. })
         ));
         assert!(solve(&m, Unmatched::Cost(f64::NAN)).is_err());
+        assert!(matches!(
+            solve_sparse(2, 2, &[(0, 0, f64::NAN)], Unmatched::MaxMatches),
+            Err(AssignError::NonFinite { .. })
+        ));
+        assert!(matches!(
+            solve_sparse(2, 2, &[(0, 2, 1.0)], Unmatched::MaxMatches),
+            Err(AssignError::OutOfRange { .. })
+        ));
         let a = solve(&m, Unmatched::MaxMatches).unwrap();
         assert!(a.matches.is_empty());
         assert_eq!(a.unmatched_cols, vec![0, 1]);

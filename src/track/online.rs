@@ -31,7 +31,7 @@ use super::cost::{Candidate, CostModel, PairCost};
 use super::lifecycle::{BoxMotion, Track};
 use super::regions::{estimate_regions, Regions};
 use super::TrackError;
-use crate::assign::{self, CostMatrix, Unmatched};
+use crate::assign::{self, Unmatched};
 use crate::frame::{BBox, Detection, Frame, Point, TrackState, TrackedShape};
 use crate::motion::{BoxKalman, BoxMotionModel, MotionError, MotionFactory};
 
@@ -92,10 +92,14 @@ struct Pair {
     cost: f64,
 }
 
-/// The pair-cost matrices of one frame.
+/// An allowed (track, prepared detection) pair and its combined cost.
+type Edge = (usize, usize, f64);
+
+/// The allowed pairs of one frame, sparse: a track only has the few candidates its region
+/// estimate found, so nothing here is `tracks × detections`.
 struct Scores {
-    main: CostMatrix,
-    reid: Option<CostMatrix>,
+    main: Vec<Edge>,
+    reid: Option<Vec<Edge>>,
 }
 
 /// Which tracks and detections the assignment stages have taken so far.
@@ -213,7 +217,7 @@ impl Tracker {
         self.frame += 1;
         self.predict();
         let regions = self.estimate_regions(&dets);
-        let scores = self.score_pairs(&regions, &dets)?;
+        let scores = self.score_pairs(&regions, &dets);
         let matches = self.assign(&scores, &dets)?;
         let mut out = Vec::new();
         let matched_tracks = self.update_matched(&matches, &dets, &mut out)?;
@@ -314,9 +318,9 @@ impl Tracker {
         estimate_regions(&shells, &det_shells)
     }
 
-    /// Phase 3: the combined cost of every candidate pair, as tracks × detections matrices:
-    /// the main association's, and the re-identification stage's (lost tracks only).
-    fn score_pairs(&self, regions: &Regions, dets: &[Prepared<'_>]) -> Result<Scores, TrackError> {
+    /// Phase 3: the combined cost of every candidate pair (sparse): the main association's,
+    /// and the re-identification stage's (lost tracks only).
+    fn score_pairs(&self, regions: &Regions, dets: &[Prepared<'_>]) -> Scores {
         let cands: Vec<Candidate<'_>> = dets
             .iter()
             .map(|d| Candidate {
@@ -330,20 +334,16 @@ impl Tracker {
             let (tc, dc) = (self.tracks[t].last.class, dets[d].det.class);
             tc < 0 || dc < 0 || tc == dc
         };
-        let fill = |model: &CostModel, regions: &Regions| -> Result<CostMatrix, TrackError> {
-            let mut m = CostMatrix::new(self.tracks.len(), dets.len());
-            for (&(t, d), c) in regions
+        let fill = |model: &CostModel, regions: &Regions| -> Vec<Edge> {
+            let costs = model.score(&self.tracks, &cands, regions);
+            regions
                 .pairs
                 .iter()
-                .zip(model.score(&self.tracks, &cands, regions))
-            {
-                if let Some(c) = c.filter(|_| same_class(t, d)) {
-                    m.set(t, d, c)?;
-                }
-            }
-            Ok(m)
+                .zip(costs)
+                .filter_map(|(&(t, d), c)| Some((t, d, c.filter(|_| same_class(t, d))?)))
+                .collect()
         };
-        let main = fill(&self.costs, regions)?;
+        let main = fill(&self.costs, regions);
         let reid = if self.reid_costs.terms().is_empty() {
             None
         } else {
@@ -356,9 +356,9 @@ impl Tracker {
                 pair_cluster: pairs.iter().map(|&k| regions.pair_cluster[k]).collect(),
                 clusters: regions.clusters.clone(),
             };
-            Some(fill(&self.reid_costs, &sub)?)
+            Some(fill(&self.reid_costs, &sub))
         };
-        Ok(Scores { main, reid })
+        Scores { main, reid }
     }
 
     /// Phase 4: the assignment stages (module docs).
@@ -421,7 +421,7 @@ impl Tracker {
     #[allow(clippy::too_many_arguments)]
     fn stage(
         &self,
-        scores: &CostMatrix,
+        scores: &[Edge],
         track_ok: &dyn Fn(&Track) -> bool,
         dets: &[Prepared<'_>],
         det_ok: &dyn Fn(&Prepared<'_>) -> bool,
@@ -429,24 +429,27 @@ impl Tracker {
         used: &mut Used,
         out: &mut Vec<Pair>,
     ) -> Result<(), TrackError> {
-        let rows: Vec<usize> = (0..self.tracks.len())
-            .filter(|&i| !used.tracks[i] && track_ok(&self.tracks[i]))
+        let edges: Vec<Edge> = scores
+            .iter()
+            .copied()
+            .filter(|&(t, d, c)| {
+                c <= max_cost
+                    && !used.tracks[t]
+                    && !used.dets[d]
+                    && track_ok(&self.tracks[t])
+                    && det_ok(&dets[d])
+            })
             .collect();
-        let cols: Vec<usize> = (0..dets.len())
-            .filter(|&j| !used.dets[j] && det_ok(&dets[j]))
-            .collect();
-        if rows.is_empty() || cols.is_empty() {
+        if edges.is_empty() {
             return Ok(());
         }
-        let sub = CostMatrix::from_fn(rows.len(), cols.len(), |r, c| {
-            scores.get(rows[r], cols[c]).filter(|&v| v <= max_cost)
-        })?;
         let policy = match self.config.unmatched_cost {
             Some(l) => Unmatched::Cost(l),
             None => Unmatched::MaxMatches,
         };
-        for m in assign::solve(&sub, policy)?.matches {
-            let (t, d) = (rows[m.row], cols[m.col]);
+        let (nt, nd) = (self.tracks.len(), dets.len());
+        for m in assign::solve_sparse(nt, nd, &edges, policy)?.matches {
+            let (t, d) = (m.row, m.col);
             used.tracks[t] = true;
             used.dets[d] = true;
             out.push(Pair {
