@@ -183,6 +183,9 @@ impl Assignment {
     }
 }
 
+/// One connected component: its rows, its columns, and its edges in local indices.
+type Component = (Vec<usize>, Vec<usize>, Vec<(usize, usize, f64)>);
+
 /// Union–find over rows `0..r` and columns `r..r+c`, for the connected components.
 struct Dsu(Vec<usize>);
 
@@ -261,7 +264,7 @@ pub fn solve_sparse(
     // Components in order of first appearance; local indices within each.
     let mut comp_of_root = vec![usize::MAX; rows + cols];
     let mut local = vec![usize::MAX; rows + cols];
-    let mut comps: Vec<(Vec<usize>, Vec<usize>, Vec<(usize, usize, f64)>)> = Vec::new();
+    let mut comps: Vec<Component> = Vec::new();
     for &(r, c, v) in edges {
         let root = dsu.find(r);
         if comp_of_root[root] == usize::MAX {
