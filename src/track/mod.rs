@@ -27,7 +27,7 @@ pub use cost::{
     MaskIouCost, PairCost, SizeCost, WeightedTerm,
 };
 pub use lifecycle::Track;
-pub use online::{BoxFeatures, FeatureExtractor, Features, MotionBuilder, Tracker};
+pub use online::{BoxFeatures, FeatureExtractor, Features, Tracker};
 pub use regions::{estimate_regions, Cluster, Regions};
 pub use sequence::{detections_by_frame, to_records, track_sequence};
 

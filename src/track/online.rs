@@ -71,7 +71,7 @@ impl FeatureExtractor for BoxFeatures {
 }
 
 /// Builds a new track's motion filter from its first box.
-pub type MotionBuilder = Box<dyn Fn(&BBox) -> Result<BoxMotion, MotionError> + Send>;
+type MotionBuilder = Box<dyn Fn(&BBox) -> Result<BoxMotion, MotionError> + Send>;
 
 /// Largest box coordinate or size accepted (pixels): far beyond any image, far below overflow.
 const MAX_COORDINATE: f64 = 1e9;
