@@ -409,18 +409,15 @@ impl Rule {
     /// Learning rate of a pixel and its new stillness count.
     #[inline(always)]
     fn rate(&self, is_fg: bool, z: f32, prev: f32, still: u8) -> (f32, u8) {
+        // Non-short-circuit `&`/`|` and selects only: the loop stays branch-free and vectorises.
         let steady = (z - prev).abs() <= self.t_still;
-        let n = if is_fg && steady {
+        let n = if is_fg & steady {
             still.saturating_add(1)
         } else {
             0
         };
-        let a = if !is_fg || n as u16 >= self.absorb {
-            self.a_bg
-        } else {
-            self.a_fg
-        };
-        (a, n)
+        let learn = !is_fg | (n as u16 >= self.absorb);
+        (if learn { self.a_bg } else { self.a_fg }, n)
     }
 }
 
@@ -449,18 +446,23 @@ fn classify_rows(frame: &Frame, st: State, rule: Rule) {
     fn rows<const C: usize>(frame: &Frame, st: State, rule: Rule) {
         let (w, h) = (frame.width() as usize, frame.height() as usize);
         let data = frame.data();
+        let mut zrow = vec![0f32; w];
         for y in 0..h {
             let src = &data[y * frame.stride()..y * frame.stride() + w * C];
             let o = y * w..(y + 1) * w;
-            for (((((p, b), pv), n), d), f) in src
-                .chunks_exact(C)
+            // Two passes per row: the de-interleaving grey conversion, then the model update
+            // on plain arrays, which vectorises where the fused loop did not.
+            for (z, p) in zrow.iter_mut().zip(src.chunks_exact(C)) {
+                *z = gray(p[0], p[1], p[2]);
+            }
+            for (((((&z, b), pv), n), d), f) in zrow
+                .iter()
                 .zip(&mut st.bg[o.clone()])
                 .zip(&mut st.prev[o.clone()])
                 .zip(&mut st.still[o.clone()])
                 .zip(&mut st.diff[o.clone()])
                 .zip(&mut st.fg[o])
             {
-                let z = gray(p[0], p[1], p[2]);
                 let dz = z - *b;
                 let ad = dz.abs();
                 let is_fg = ad > rule.t;

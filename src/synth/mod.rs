@@ -711,6 +711,8 @@ pub struct Scene {
     ids: Vec<u16>,
     poly: Vec<[f64; 2]>,
     order: Vec<usize>,
+    /// Scratch for the sensor noise bytes.
+    noise: Vec<u8>,
     raster: Rasterizer,
     rng: rand_xoshiro::Xoshiro256PlusPlus,
 }
@@ -742,6 +744,7 @@ impl Scene {
             ids: vec![0; w as usize * h as usize],
             poly: Vec::new(),
             order: Vec::new(),
+            noise: Vec::new(),
             raster: Rasterizer::default(),
             rng: stream(cfg.seed, OBJECT_STREAM),
             cfg,
@@ -1077,32 +1080,34 @@ impl Scene {
     }
 
     /// Illumination drift and sensor noise, applied after the ground truth is taken.
-    fn apply_appearance(&self, index: u32, img: &mut [u8]) {
+    fn apply_appearance(&mut self, index: u32, img: &mut [u8]) {
         let a = &self.cfg.appearance;
+        // Both passes are plain element-wise integer arithmetic over the whole image, written
+        // so that they vectorise (a lookup table or a per-byte division would not).
         if a.illumination_drift > 0.0 {
             let t = (index - 1) as f64 / a.illumination_period;
             let gain = 1.0 + a.illumination_drift * sin_cos(std::f64::consts::TAU * t).0;
-            let lut: Vec<u8> = (0..256)
-                .map(|v| (v as f64 * gain + 0.5).clamp(0.0, 255.0) as u8)
-                .collect();
+            let g16 = (gain * 65536.0 + 0.5) as u32;
             for p in img.iter_mut() {
-                *p = lut[*p as usize];
+                *p = ((*p as u32 * g16 + 32768) >> 16).min(255) as u8;
             }
         }
         if a.sensor_noise > 0 {
-            let amp = a.sensor_noise as i32;
-            let span = (2 * amp + 1) as u64;
+            let amp = a.sensor_noise as i16;
+            let span = 2 * amp as u16 + 1;
             let mut rng = stream(
                 self.cfg.seed ^ (index as u64).wrapping_mul(0x2545_F491_4F6C_DD1D),
                 SENSOR_STREAM,
             );
-            for chunk in img.chunks_mut(8) {
-                let mut bits: u64 = rng.gen();
-                for p in chunk {
-                    let d = ((bits & 0xff) % span) as i32 - amp;
-                    bits >>= 8;
-                    *p = (*p as i32 + d).clamp(0, 255) as u8;
-                }
+            self.noise.resize(img.len(), 0);
+            for chunk in self.noise.chunks_mut(8) {
+                let bits: u64 = rng.gen();
+                chunk.copy_from_slice(&bits.to_le_bytes()[..chunk.len()]);
+            }
+            for (p, &n) in img.iter_mut().zip(&self.noise) {
+                // Multiply-shift maps a random byte onto 0..span without a division.
+                let d = ((n as u16 * span) >> 8) as i16 - amp;
+                *p = (*p as i16 + d).clamp(0, 255) as u8;
             }
         }
     }
