@@ -392,3 +392,34 @@ fn records_carry_masks_that_decode_back() {
         assert_eq!(fr.box_detection_records().len(), dets.len());
     }
 }
+
+#[test]
+fn wrap_policy_keeps_ids_and_reenters_on_the_other_side() {
+    let f = frames(SynthConfig {
+        frames: 300,
+        motion: shapetrack::synth::MotionConfig {
+            border: BorderPolicy::Wrap,
+            speed: (4.0, 7.0),
+            ..Default::default()
+        },
+        ..SynthConfig::with_seed(2)
+    });
+    assert!(f.iter().all(|fr| fr.gt.iter().all(|g| g.id <= 10)));
+    // Some object is seen cut by the left border and, later, by the right one (or vice versa).
+    let at = |fr: &SynthFrame, id: u64, left: bool| {
+        fr.gt.iter().any(|g| {
+            g.id == id
+                && if left {
+                    g.bbox.x <= 0.0
+                } else {
+                    g.bbox.x2() >= 640.0
+                }
+        })
+    };
+    let wrapped = (1..=10u64).any(|id| {
+        let l = f.iter().position(|fr| at(fr, id, true));
+        let r = f.iter().position(|fr| at(fr, id, false));
+        matches!((l, r), (Some(_), Some(_)))
+    });
+    assert!(wrapped);
+}

@@ -85,6 +85,18 @@ pub enum SynthError {
         /// High end given.
         hi: f64,
     },
+    /// The objects' textures would need more memory than the scene allows.
+    #[error("textures of {shapes} shapes up to radius {radius} need {bytes} bytes, at most {max}")]
+    TooLarge {
+        /// Objects alive at once (random plus scripted).
+        shapes: u64,
+        /// Largest object radius (times aspect for scripted shapes).
+        radius: f64,
+        /// Estimated texture bytes.
+        bytes: u64,
+        /// The limit.
+        max: u64,
+    },
     /// More objects than a frame's id buffer can hold.
     #[error("{shapes} shapes requested, at most {max} are supported")]
     TooManyShapes {
@@ -462,7 +474,7 @@ impl SynthConfig {
         }
         range("fps", self.fps, 1e-3, 1e4)?;
         let m = &self.motion;
-        pair("motion.radius", m.radius, 2.0, 2000.0)?;
+        pair("motion.radius", m.radius, 2.0, 500.0)?;
         pair("motion.speed", m.speed, 0.0, 1000.0)?;
         range("motion.accel", m.accel, 0.0, 100.0)?;
         let ap = (m.accel_period.0 as f64, m.accel_period.1 as f64);
@@ -500,8 +512,8 @@ impl SynthConfig {
         range("noise.split_prob", n.split_prob, 0.0, 1.0)?;
         range("noise.box_jitter", n.box_jitter, 0.0, 1.0)?;
         for s in &self.scripted {
-            range("scripted.radius", s.radius, 1.0, 4000.0)?;
-            range("scripted.aspect", s.aspect, 0.01, 100.0)?;
+            range("scripted.radius", s.radius, 1.0, 1000.0)?;
+            range("scripted.aspect", s.aspect, 0.01, 10.0)?;
             range("scripted.center.x", s.center.x, -1e6, 1e6)?;
             range("scripted.center.y", s.center.y, -1e6, 1e6)?;
             range("scripted.velocity.x", s.velocity.x, -1e4, 1e4)?;
@@ -509,6 +521,28 @@ impl SynthConfig {
             range("scripted.angle", s.angle, -1e6, 1e6)?;
             range("scripted.angular_velocity", s.angular_velocity, -1e3, 1e3)?;
             range("scripted.z", s.z, -1e9, 1e9)?;
+        }
+        // Textures live in object space at scale 1, about (2·bound)² texels of 3 bytes each;
+        // refuse configs whose live objects would need hundreds of megabytes (in wasm32 an
+        // allocation failure aborts the page).
+        let texture = |r: f64| {
+            let side = 2.0 * (r * std::f64::consts::SQRT_2 + 3.0);
+            (3.0 * side * side) as u64
+        };
+        let mut bytes = self.shapes as u64 * texture(m.radius.1);
+        let mut radius = m.radius.1;
+        for s in &self.scripted {
+            let r = s.radius * s.aspect.max(1.0);
+            radius = radius.max(r);
+            bytes += texture(r);
+        }
+        if bytes > MAX_TEXTURE_BYTES {
+            return Err(SynthError::TooLarge {
+                shapes: total,
+                radius,
+                bytes,
+                max: MAX_TEXTURE_BYTES,
+            });
         }
         Ok(())
     }
@@ -528,6 +562,8 @@ impl SynthConfig {
 
 /// Objects a frame can hold (the id buffer is 16-bit).
 const MAX_SHAPES: u64 = 10_000;
+/// Texture memory a scene may use.
+const MAX_TEXTURE_BYTES: u64 = 256 << 20;
 
 /// Purposes of the scene-wide random streams.
 const LAYOUT_STREAM: u64 = 0x6c61_796f;
@@ -1259,6 +1295,18 @@ mod tests {
         let mut c = SynthConfig::default();
         c.motion.radius.0 = f64::NAN;
         assert!(Scene::new(c).is_err());
+        let c = SynthConfig {
+            shapes: 5000,
+            motion: MotionConfig {
+                radius: (400.0, 500.0),
+                ..MotionConfig::default()
+            },
+            ..SynthConfig::default()
+        };
+        assert!(matches!(
+            Scene::new(c).unwrap_err(),
+            SynthError::TooLarge { .. }
+        ));
     }
 
     #[test]
