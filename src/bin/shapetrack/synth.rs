@@ -44,8 +44,17 @@ pub enum Border {
     Wrap,
 }
 
+/// The files written, shown by `shapetrack synth --help`.
+const LAYOUT: &str = "Writes DIR/seqinfo.ini, DIR/img1/000001.png..., \
+DIR/gt/gt.txt (frame,id,x,y,w,h,1,1,visibility: MOT16-style, class 1), \
+DIR/gt/gt_mots.txt (MOTS txt: frame id 1 height width rle, with id = object id, not class*1000+id), \
+DIR/det/det.txt (frame,-1,x,y,w,h,score: tight boxes of the noisy masks), \
+DIR/det/det_mots.txt (the same detections' masks, in the same order, id -1 class -1) and \
+DIR/det/det_jitter.txt (box-only variant with jittered boxes). Frames and ids are 1-based.";
+
 /// Arguments of `shapetrack synth`.
 #[derive(clap::Args)]
+#[command(after_help = LAYOUT)]
 pub struct Args {
     /// Random seed: the same seed and flags give byte-identical output.
     #[arg(long, default_value_t = 0)]
