@@ -1,63 +1,123 @@
 //! The online tracker: one [`Tracker::update`] per frame, in named phases.
 //!
 //! ```text
-//! prepare → predict → estimate regions → score pairs → assign → update matched → age lost → spawn
+//! prepare → predict → estimate regions → describe → score pairs → assign → update matched
+//!   → refresh appearance → age lost → coast → spawn
 //! ```
 //!
-//! - **prepare**: validate the detections (typed errors, before any state changes), drop those
-//!   below `min_score` or with zero area, split the rest into high and low confidence, and
-//!   compute each one's [`Features`] once.
+//! - **prepare**: validate the detections and the frame (typed errors, before any state
+//!   changes), clip masks to the frame, drop detections below `min_score`, with zero area or an
+//!   empty mask, split the rest into high and low confidence, and compute each one's cheap
+//!   [`Features`] once (centroid, area, and for masks the convex shell).
 //! - **predict**: every track's motion filter steps one frame.
-//! - **estimate regions**: the predicted boxes, grown by a margin that widens while a track is
-//!   unmatched, meet the detections' boxes ([`estimate_regions`]); only those pairs are scored.
+//! - **estimate regions** (thesis Alg. 2): box mode: the predicted boxes, grown by a margin
+//!   that widens while a track is unmatched, meet the detections' boxes
+//!   ([`estimate_regions`]). With masks: each track's last shell, moved by its predicted
+//!   displacement (swept along it for fast or lost tracks) and merged with its predicted box,
+//!   grown by the same margin, meets the detections' shells by GJK
+//!   ([`crate::region::region_clusters`]). Only pairs inside a cluster are ever scored.
+//! - **describe**: appearance (shape context, SIFT, colour: only the parts the enabled terms
+//!   read) for the detections of *ambiguous* clusters only: more than one track or detection,
+//!   or a lost track to re-identify. A 1×1 cluster is decided by geometry and motion alone.
 //! - **score pairs**: the [`CostModel`] combines the enabled [`PairCost`] terms per pair.
 //! - **assign**: optimal assignment in three stages (ByteTrack-style): (1) confirmed and lost
 //!   tracks × high detections, (2) tracks still unmatched that were matched last frame × low
 //!   detections, (3) tentative tracks × the remaining high detections.
-//! - **update matched**: filters correct, tentative tracks with enough hits are confirmed and
-//!   get an id, lost tracks are re-identified under their old id.
+//! - **update matched**: filters correct (with the amodal box of a partly hidden mask, see
+//!   [`Config::amodal`]), tentative tracks with enough hits are confirmed and get an id, lost
+//!   tracks are re-identified under their old id; appearance computed this frame becomes the
+//!   track's last (and, if the shape was seen whole, reference) appearance.
+//! - **refresh appearance**: a matched track's appearance is computed now when it will be
+//!   needed and this frame is the last chance to see it: when its next search region meets
+//!   another track's (a crossing is coming), or when its reference appearance is missing or
+//!   older than `appearance.refresh` frames while the shape is seen whole (so a track lost
+//!   behind an occluder is re-identified by a whole view).
 //! - **age lost**: unmatched tracks become lost, and are removed after `max_lost` frames
 //!   (tentative ones after `max_tentative_misses`).
+//! - **coast**: with [`Config::coast_frames`], confirmed tracks that were seen whole and missed
+//!   for at most that many frames are reported at their predicted place.
 //! - **spawn**: confident unmatched detections start tentative tracks.
 //!
 //! **What is reported.** Each call returns the confirmed tracks matched in this frame, with the
 //! matched detection's box, mask and score (boxes are never invented online). With
 //! `report_tentative`, the call that confirms a track also returns its earlier tentative frames
 //! (with their own frame numbers), so a track's first `min_hits − 1` frames are not lost. Lost
-//! tracks are not reported: filling their gaps is the offline pass's job.
+//! tracks are not reported (except short coasts, above): filling their gaps is the offline
+//! pass's job.
+//!
+//! **Bad input.** Non-finite or negative boxes and scores are typed errors
+//! ([`TrackError::InvalidDetection`]); a frame whose size differs from the previous frames' is
+//! [`TrackError::FrameSize`] (start a new tracker for a new video size); a mask reaching
+//! outside the frame is clipped to it, and a mask that is empty (or empty once clipped) is
+//! dropped like a zero-area box. None of these change the tracker's state.
 
-use super::config::Config;
-use super::cost::{Candidate, CostModel, PairCost};
-use super::lifecycle::{BoxMotion, Track};
+use std::borrow::Cow;
+use std::sync::Arc;
+
+use super::appearance::{
+    ColourCost, ColourMode, ShapeContextCost, ShapeVariant, SiftCost, TrackSide,
+};
+use super::config::{Config, Terms};
+use super::cost::{Candidate, CostModel, PairCost, PairScore};
+use super::features::{Appearance, MaskFeatures, Needs};
+use super::lifecycle::{BoxMotion, Sizes, Track};
 use super::regions::{estimate_regions, Regions};
 use super::TrackError;
 use crate::assign::{self, Unmatched};
 use crate::frame::{BBox, Detection, Frame, Point, TrackState, TrackedShape};
+use crate::geometry::{overlapping_box_pairs, ConvexShell};
 use crate::motion::{BoxKalman, BoxMotionModel, MotionError, MotionFactory};
+use crate::region::region_clusters;
 
 /// Per-detection features, computed once per frame by a [`FeatureExtractor`] and kept on the
 /// track as its last appearance when the detection is matched.
 ///
-/// Appearance modules add their descriptors here (shape context, colour palette, SIFT
-/// keypoints); the pair-cost terms that read them return "no data" while a field is absent.
+/// The cheap part (centroid, area, shell) is computed for every detection in the prepare
+/// phase; the appearance only when the tracker needs it (module docs), and then shared with
+/// the track. The pair-cost terms that read a part return "no data" while it is absent.
 #[derive(Debug, Clone, Default, PartialEq)]
 #[non_exhaustive]
 pub struct Features {
     /// Centroid: mask moments (thesis eq. 10) when there is a mask, else the box centre.
     pub centroid: Point,
+    /// Area: foreground pixels of the mask, else the box area (0 when the extractor did not
+    /// say).
+    pub area: f64,
+    /// The mask's convex shell, for the region estimator (`None` for box detections).
+    pub shell: Option<Arc<ConvexShell>>,
+    /// Appearance, when it was computed this frame.
+    pub appearance: Option<Arc<Appearance>>,
 }
 
 impl Features {
     /// Features holding a centroid only.
     pub fn with_centroid(centroid: Point) -> Self {
-        Self { centroid }
+        Self {
+            centroid,
+            ..Self::default()
+        }
     }
 }
 
-/// Computes a detection's [`Features`] (once per detection per frame).
+/// Computes a detection's [`Features`]: the cheap part once per detection per frame, the
+/// appearance on demand.
 pub trait FeatureExtractor: Send {
-    /// The features of `det` in `frame` (`None` in box mode, where there are no pixels).
+    /// The cheap features of `det` in `frame` (`None` in box mode, where there are no pixels).
     fn extract(&self, frame: Option<&Frame<'_>>, det: &Detection) -> Result<Features, String>;
+
+    /// The appearance of `det` in `frame` (tracker frame number `frame_number`), `None` when
+    /// the extractor computes none (the default). Called only for detections the tracker
+    /// needs appearance for. A failure is treated as "no appearance": the terms that would
+    /// read it drop out for this detection.
+    fn describe(
+        &self,
+        frame: &Frame<'_>,
+        det: &Detection,
+        frame_number: u32,
+    ) -> Result<Option<Appearance>, String> {
+        let _ = (frame, det, frame_number);
+        Ok(None)
+    }
 }
 
 /// The default extractor: the centroid only. Needs no image.
@@ -66,7 +126,12 @@ pub struct BoxFeatures;
 
 impl FeatureExtractor for BoxFeatures {
     fn extract(&self, _frame: Option<&Frame<'_>>, det: &Detection) -> Result<Features, String> {
-        Ok(Features::with_centroid(det.centroid()))
+        let mut f = Features::with_centroid(det.centroid());
+        f.area = match &det.mask {
+            Some(m) => m.area() as f64,
+            None => det.bbox.area(),
+        };
+        Ok(f)
     }
 }
 
@@ -76,10 +141,10 @@ type MotionBuilder = Box<dyn Fn(&BBox) -> Result<BoxMotion, MotionError> + Send>
 /// Largest box coordinate or size accepted (pixels): far beyond any image, far below overflow.
 const MAX_COORDINATE: f64 = 1e9;
 
-/// A detection that survived `prepare`.
+/// A detection that survived `prepare` (its mask clipped to the frame when needed).
 struct Prepared<'a> {
     index: usize,
-    det: &'a Detection,
+    det: Cow<'a, Detection>,
     features: Features,
     high: bool,
 }
@@ -92,8 +157,9 @@ struct Pair {
     cost: f64,
 }
 
-/// An allowed (track, prepared detection) pair and its combined cost.
-type Edge = (usize, usize, f64);
+/// An allowed pair: track, prepared detection, the cost the assignment minimises, and the
+/// cost thresholds compare (see [`PairScore`]).
+type Edge = (usize, usize, f64, f64);
 
 /// The allowed pairs of one frame, sparse: a track only has the few candidates its region
 /// estimate found, so nothing here is `tracks × detections`.
@@ -114,10 +180,14 @@ pub struct Tracker {
     costs: CostModel,
     reid_costs: CostModel,
     extractor: Box<dyn FeatureExtractor>,
+    /// Appearance parts the registered terms read.
+    needs: Needs,
     motion: MotionBuilder,
     tracks: Vec<Track>,
     frame: u32,
     next_id: u64,
+    /// Size of the frames seen so far (width, height).
+    frame_size: Option<(u32, u32)>,
 }
 
 impl std::fmt::Debug for Tracker {
@@ -133,24 +203,95 @@ impl std::fmt::Debug for Tracker {
     }
 }
 
+/// Registers the appearance terms of `terms` (those with a positive weight) on `model`.
+fn register_appearance(
+    model: &mut CostModel,
+    terms: &Terms,
+    config: &Config,
+    side: TrackSide,
+    colour: ColourMode,
+) {
+    model.push(
+        Box::new(ShapeContextCost {
+            config: config.appearance.shape_context,
+            variant: config.shape_variant,
+            matching: config.sift_matching.clone(),
+            side,
+        }),
+        terms.shape_context.weight,
+        terms.shape_context.gate,
+    );
+    model.push(
+        Box::new(ColourCost {
+            config: config.appearance.colour,
+            mode: colour,
+            side,
+        }),
+        terms.colour.weight,
+        terms.colour.gate,
+    );
+    model.push(
+        Box::new(SiftCost {
+            matching: config.sift_matching.clone(),
+            min_keypoints: config.sift_min_keypoints,
+            side,
+        }),
+        terms.sift.weight,
+        terms.sift.gate,
+    );
+}
+
+/// The appearance parts the terms of `config` read.
+fn needs_of(config: &Config) -> Needs {
+    let on = |f: fn(&Terms) -> f64| f(&config.terms) > 0.0 || f(&config.reid_terms) > 0.0;
+    let shape = on(|t| t.shape_context.weight);
+    Needs {
+        shape,
+        sift: on(|t| t.sift.weight) || (shape && config.shape_variant == ShapeVariant::Sift),
+        colour: on(|t| t.colour.weight),
+    }
+}
+
 impl Tracker {
-    /// A tracker with the built-in terms of `config`, the constant-velocity box Kalman filter
-    /// and the centroid-only feature extractor.
+    /// A tracker with the terms of `config` (geometry, motion and appearance), the
+    /// constant-velocity box Kalman filter and the [`MaskFeatures`] extractor (which gives box
+    /// detections their centre only, so box mode needs nothing else).
     pub fn new(config: Config) -> Result<Self, TrackError> {
         config.validate()?;
         let params = config.motion;
         let motion: MotionBuilder = Box::new(move |z: &BBox| -> Result<BoxMotion, MotionError> {
             Ok(Box::new(BoxKalman::new(z, params)?))
         });
+        // The IoA buffer grows like the search region: twice the per-side margin growth.
+        let ioa_growth = 2.0 * config.region_margin_per_miss;
+        let mut costs = CostModel::from_terms_with(&config.terms, ioa_growth);
+        register_appearance(
+            &mut costs,
+            &config.terms,
+            &config,
+            TrackSide::Last,
+            ColourMode::Aligned,
+        );
+        let mut reid_costs = CostModel::from_terms_with(&config.reid_terms, ioa_growth);
+        register_appearance(
+            &mut reid_costs,
+            &config.reid_terms,
+            &config,
+            TrackSide::Reference,
+            ColourMode::Contained,
+        );
+        let needs = needs_of(&config);
         Ok(Self {
-            costs: CostModel::from_terms(&config.terms),
-            reid_costs: CostModel::from_terms(&config.reid_terms),
+            costs,
+            reid_costs,
+            extractor: Box::new(MaskFeatures::new(config.appearance.clone(), needs)),
+            needs,
             config,
-            extractor: Box::new(BoxFeatures),
             motion,
             tracks: Vec::new(),
             frame: 0,
             next_id: 1,
+            frame_size: None,
         })
     }
 
@@ -165,7 +306,8 @@ impl Tracker {
         self
     }
 
-    /// Replaces the feature extractor.
+    /// Replaces the feature extractor. The tracker still asks it for appearance only where
+    /// the registered terms need it.
     pub fn with_extractor(mut self, extractor: Box<dyn FeatureExtractor>) -> Self {
         self.extractor = extractor;
         self
@@ -206,31 +348,50 @@ impl Tracker {
     /// Processes one frame: see the module docs for the phases and what is reported.
     ///
     /// `frame` is the image, when there is one (box mode passes `None`). Invalid detections
-    /// (NaN or infinite values, negative sizes) are rejected with an error before the tracker's
-    /// state changes.
+    /// (NaN or infinite values, negative sizes) and a change of frame size are rejected with an
+    /// error before the tracker's state changes.
     pub fn update(
         &mut self,
         frame: Option<&Frame<'_>>,
         detections: &[Detection],
     ) -> Result<Vec<TrackedShape>, TrackError> {
-        let dets = self.prepare(frame, detections)?;
+        let size = frame.map(|f| (f.width(), f.height()));
+        if let (Some((width, height)), Some((expected_width, expected_height))) =
+            (size, self.frame_size)
+        {
+            if (width, height) != (expected_width, expected_height) {
+                return Err(TrackError::FrameSize {
+                    width,
+                    height,
+                    expected_width,
+                    expected_height,
+                });
+            }
+        }
+        let mut dets = self.prepare(frame, detections)?;
+        if size.is_some() {
+            self.frame_size = size;
+        }
         self.frame += 1;
         self.predict();
         let regions = self.estimate_regions(&dets);
+        self.describe(frame, &regions, &mut dets);
         let scores = self.score_pairs(&regions, &dets);
         let matches = self.assign(&scores, &dets)?;
         let mut out = Vec::new();
         let matched_tracks = self.update_matched(&matches, &dets, &mut out)?;
+        self.refresh_appearance(frame, &matches, &dets);
         self.age_lost(&matched_tracks);
+        self.coast(&mut out);
         let mut det_used = vec![false; dets.len()];
         for m in &matches {
             det_used[m.det] = true;
         }
-        self.spawn(&dets, &det_used, &mut out)?;
+        self.spawn(frame, &dets, &det_used, &mut out)?;
         Ok(out)
     }
 
-    /// Phase 0: validate, filter, classify and extract features.
+    /// Phase 0: validate, clip, filter, classify and extract the cheap features.
     fn prepare<'a>(
         &self,
         frame: Option<&Frame<'_>>,
@@ -277,15 +438,19 @@ impl Tracker {
             if det.score < self.config.min_score || b.w <= 0.0 || b.h <= 0.0 {
                 continue;
             }
+            let Some(det) = clip_to_frame(det, frame) else {
+                continue;
+            };
             let features = self
                 .extractor
-                .extract(frame, det)
+                .extract(frame, &det)
                 .map_err(|message| TrackError::Features { index, message })?;
+            let high = det.score >= self.config.high_score;
             out.push(Prepared {
                 index,
                 det,
                 features,
-                high: det.score >= self.config.high_score,
+                high,
             });
         }
         Ok(out)
@@ -302,30 +467,95 @@ impl Tracker {
         }
     }
 
-    /// Phase 2: which pairs are close enough to compare.
-    fn estimate_regions(&self, dets: &[Prepared<'_>]) -> Regions {
-        let shells: Vec<BBox> = self
-            .tracks
-            .iter()
-            .map(|t| {
-                let f = self.config.region_margin
-                    + self.config.region_margin_per_miss * t.misses as f64;
-                let p = t.predicted;
-                BBox::from_center(p.center(), p.w * (1.0 + 2.0 * f), p.h * (1.0 + 2.0 * f))
-            })
-            .collect();
-        let det_shells: Vec<BBox> = dets.iter().map(|d| d.det.bbox).collect();
-        estimate_regions(&shells, &det_shells)
+    /// Margin factor of a track's search region: grows while it is unmatched.
+    fn margin_factor(&self, t: &Track) -> f64 {
+        self.config.region_margin + self.config.region_margin_per_miss * t.misses as f64
     }
 
-    /// Phase 3: the combined cost of every candidate pair (sparse): the main association's,
+    /// Phase 2: which pairs are close enough to compare (thesis Alg. 2).
+    fn estimate_regions(&self, dets: &[Prepared<'_>]) -> Regions {
+        let shells_mode = dets.iter().any(|d| d.features.shell.is_some())
+            || self
+                .tracks
+                .iter()
+                .any(|t| t.features.as_ref().is_some_and(|f| f.shell.is_some()));
+        if !shells_mode {
+            let shells: Vec<BBox> = self
+                .tracks
+                .iter()
+                .map(|t| {
+                    let f = self.margin_factor(t);
+                    let p = t.predicted;
+                    BBox::from_center(p.center(), p.w * (1.0 + 2.0 * f), p.h * (1.0 + 2.0 * f))
+                })
+                .collect();
+            let det_shells: Vec<BBox> = dets.iter().map(|d| d.det.bbox).collect();
+            return estimate_regions(&shells, &det_shells);
+        }
+        let track_shells: Vec<ConvexShell> = self
+            .tracks
+            .iter()
+            .map(|t| search_shell(t, self.margin_factor(t)))
+            .collect();
+        let det_shells: Vec<ConvexShell> = dets
+            .iter()
+            .map(|d| match &d.features.shell {
+                Some(s) => s.as_ref().clone(),
+                None => ConvexShell::from_bbox(&d.det.bbox).unwrap_or_default(),
+            })
+            .collect();
+        Regions::from(region_clusters(&track_shells, &det_shells))
+    }
+
+    /// Phase 3: appearance for the detections of ambiguous clusters (module docs).
+    fn describe(&self, frame: Option<&Frame<'_>>, regions: &Regions, dets: &mut [Prepared<'_>]) {
+        let Some(frame) = frame else {
+            return;
+        };
+        if self.needs.is_empty() {
+            return;
+        }
+        let mut want = vec![!self.config.appearance.lazy; dets.len()];
+        for c in &regions.clusters {
+            let ambiguous = c.tracks.len() > 1
+                || c.dets.len() > 1
+                || c.tracks.iter().any(|&t| {
+                    self.tracks
+                        .get(t)
+                        .is_some_and(|t| t.state == TrackState::Lost)
+                });
+            if ambiguous {
+                for &d in &c.dets {
+                    if let Some(w) = want.get_mut(d) {
+                        *w = true;
+                    }
+                }
+            }
+        }
+        for (d, w) in dets.iter_mut().zip(want) {
+            if w && d.features.appearance.is_none() {
+                d.features.appearance = self.appearance_of(frame, &d.det);
+            }
+        }
+    }
+
+    /// The appearance of one detection (`None` without a mask, or if the extractor fails).
+    fn appearance_of(&self, frame: &Frame<'_>, det: &Detection) -> Option<Arc<Appearance>> {
+        det.mask.as_ref()?;
+        match self.extractor.describe(frame, det, self.frame) {
+            Ok(a) => a.map(Arc::new),
+            Err(_) => None,
+        }
+    }
+
+    /// Phase 4: the combined cost of every candidate pair (sparse): the main association's,
     /// and the re-identification stage's (lost tracks only).
     fn score_pairs(&self, regions: &Regions, dets: &[Prepared<'_>]) -> Scores {
         let cands: Vec<Candidate<'_>> = dets
             .iter()
             .map(|d| Candidate {
                 index: d.index,
-                detection: d.det,
+                detection: &d.det,
                 features: Some(&d.features),
             })
             .collect();
@@ -335,12 +565,15 @@ impl Tracker {
             tc < 0 || dc < 0 || tc == dc
         };
         let fill = |model: &CostModel, regions: &Regions| -> Vec<Edge> {
-            let costs = model.score(&self.tracks, &cands, regions);
+            let scores = model.score_pairs(&self.tracks, &cands, regions);
             regions
                 .pairs
                 .iter()
-                .zip(costs)
-                .filter_map(|(&(t, d), c)| Some((t, d, c.filter(|_| same_class(t, d))?)))
+                .zip(scores)
+                .filter_map(|(&(t, d), s): (&(usize, usize), Option<PairScore>)| {
+                    let s = s.filter(|_| same_class(t, d))?;
+                    Some((t, d, s.cost, s.absolute))
+                })
                 .collect()
         };
         let main = fill(&self.costs, regions);
@@ -361,7 +594,7 @@ impl Tracker {
         Scores { main, reid }
     }
 
-    /// Phase 4: the assignment stages (module docs).
+    /// Phase 5: the assignment stages (module docs).
     fn assign(&self, scores: &Scores, dets: &[Prepared<'_>]) -> Result<Vec<Pair>, TrackError> {
         let cfg = &self.config;
         let mut used = Used {
@@ -432,8 +665,8 @@ impl Tracker {
         let edges: Vec<Edge> = scores
             .iter()
             .copied()
-            .filter(|&(t, d, c)| {
-                c <= max_cost
+            .filter(|&(t, d, _, gate)| {
+                gate <= max_cost
                     && !used.tracks[t]
                     && !used.dets[d]
                     && track_ok(&self.tracks[t])
@@ -448,7 +681,8 @@ impl Tracker {
             None => Unmatched::MaxMatches,
         };
         let (nt, nd) = (self.tracks.len(), dets.len());
-        for m in assign::solve_sparse(nt, nd, &edges, policy)?.matches {
+        let costs: Vec<(usize, usize, f64)> = edges.iter().map(|&(t, d, c, _)| (t, d, c)).collect();
+        for m in assign::solve_sparse(nt, nd, &costs, policy)?.matches {
             let (t, d) = (m.row, m.col);
             used.tracks[t] = true;
             used.dets[d] = true;
@@ -461,7 +695,7 @@ impl Tracker {
         Ok(())
     }
 
-    /// Phase 5: correct the matched tracks, confirm and re-identify. Returns which tracks were
+    /// Phase 6: correct the matched tracks, confirm and re-identify. Returns which tracks were
     /// matched.
     fn update_matched(
         &mut self,
@@ -470,43 +704,23 @@ impl Tracker {
         out: &mut Vec<TrackedShape>,
     ) -> Result<Vec<bool>, TrackError> {
         let mut matched = vec![false; self.tracks.len()];
+        let mut confirming = Vec::new();
         for m in matches {
-            let (Some(t), Some(d)) = (self.tracks.get_mut(m.track), dets.get(m.det)) else {
+            let (Some(d), true) = (dets.get(m.det), m.track < self.tracks.len()) else {
                 continue;
             };
             matched[m.track] = true;
-            if self.config.reupdate_after_gap && t.misses > 0 {
-                if let Some(snap) = &t.snapshot {
-                    t.motion = reupdate(snap.as_ref(), &t.last.bbox, &d.det.bbox, t.misses)?;
-                }
-            }
-            t.motion.update(&d.det.bbox)?;
-            if self.config.reupdate_after_gap {
-                t.snapshot = Some(t.motion.clone_box());
-            }
-            t.hits += 1;
-            t.misses = 0;
-            t.last_frame = self.frame;
-            t.last = d.det.clone();
-            t.features = Some(d.features.clone());
-            let shape = |id: u64, state: TrackState| shape_of(self.frame, id, state, d, m.cost);
+            self.correct(m.track, d)?;
+            let frame = self.frame;
+            let min_hits = self.config.min_hits;
+            let report = self.config.report_tentative;
+            let t = &mut self.tracks[m.track];
+            let shape = |id: u64, state: TrackState| shape_of(frame, id, state, d, m.cost);
             match t.state {
                 TrackState::Tentative => {
-                    if t.hits >= self.config.min_hits {
-                        let id = self.next_id;
-                        self.next_id += 1;
-                        t.id = Some(id);
-                        t.state = TrackState::Confirmed;
-                        if self.config.report_tentative {
-                            for mut s in t.pending.drain(..) {
-                                s.id = id;
-                                s.state = TrackState::Confirmed;
-                                out.push(s);
-                            }
-                        }
-                        t.pending = Vec::new();
-                        out.push(shape(id, TrackState::Confirmed));
-                    } else if self.config.report_tentative {
+                    if t.hits >= min_hits {
+                        confirming.push(*m);
+                    } else if report {
                         t.pending.push(shape(0, TrackState::Tentative));
                     }
                 }
@@ -518,10 +732,235 @@ impl Tracker {
                 }
             }
         }
+        for m in confirming {
+            let Some(d) = dets.get(m.det) else {
+                continue;
+            };
+            // A shape that reappears from behind an occluder may start a new track before it
+            // is recognised (its first views are slivers); at confirmation, with min_hits views
+            // of evidence, a lost track it matches takes it over, history included.
+            let target = match self.reidentify_at_confirmation(m.track, d, &matched) {
+                Some(lost) => {
+                    matched[lost] = true;
+                    self.correct(lost, d)?;
+                    let hits = self.tracks[m.track].hits;
+                    let pending = std::mem::take(&mut self.tracks[m.track].pending);
+                    self.tracks[m.track].state = TrackState::Removed;
+                    let l = &mut self.tracks[lost];
+                    l.hits += hits.saturating_sub(1);
+                    l.pending = pending;
+                    lost
+                }
+                None => {
+                    let id = self.next_id;
+                    self.next_id += 1;
+                    self.tracks[m.track].id = Some(id);
+                    m.track
+                }
+            };
+            let frame = self.frame;
+            let report = self.config.report_tentative;
+            let t = &mut self.tracks[target];
+            t.state = TrackState::Confirmed;
+            let Some(id) = t.id else {
+                continue;
+            };
+            if report {
+                for mut s in t.pending.drain(..) {
+                    s.id = id;
+                    s.state = TrackState::Confirmed;
+                    out.push(s);
+                }
+            }
+            t.pending = Vec::new();
+            out.push(shape_of(frame, id, TrackState::Confirmed, d, m.cost));
+        }
         Ok(matched)
     }
 
-    /// Phase 6: unmatched tracks miss a frame; lost ones past `max_lost` are removed.
+    /// The lost track that the tentative track `tentative`, about to be confirmed with the
+    /// detection `d`, is most likely to be (lowest re-identification cost within
+    /// `reid_max_cost`), if [`Config::reid_at_confirmation`] is on.
+    fn reidentify_at_confirmation(
+        &self,
+        tentative: usize,
+        d: &Prepared<'_>,
+        matched: &[bool],
+    ) -> Option<usize> {
+        if !self.config.reid_at_confirmation || self.reid_costs.terms().is_empty() {
+            return None;
+        }
+        let class = self.tracks.get(tentative)?.last.class;
+        let cand = Candidate {
+            index: d.index,
+            detection: &d.det,
+            features: Some(&d.features),
+        };
+        let mut best: Option<(usize, f64)> = None;
+        for (i, t) in self.tracks.iter().enumerate() {
+            if i == tentative
+                || t.state != TrackState::Lost
+                || t.id.is_none()
+                || matched.get(i).copied().unwrap_or(true)
+                || (class >= 0 && t.last.class >= 0 && class != t.last.class)
+            {
+                continue;
+            }
+            let costs: Vec<Option<f64>> = self
+                .reid_costs
+                .terms()
+                .iter()
+                .map(|w| w.term.cost(t, &cand))
+                .collect();
+            let Some(c) = self.reid_costs.combine(&costs) else {
+                continue;
+            };
+            if c <= self.config.reid_max_cost && best.is_none_or(|(_, b)| c < b) {
+                best = Some((i, c));
+            }
+        }
+        best.map(|(i, _)| i)
+    }
+
+    /// Corrects track `ti` with its matched detection `d`: motion filter (amodal box of a
+    /// partial view), reference size, appearance, last detection.
+    fn correct(&mut self, ti: usize, d: &Prepared<'_>) -> Result<(), TrackError> {
+        let cfg = &self.config;
+        let frame = self.frame;
+        let Some(t) = self.tracks.get_mut(ti) else {
+            return Ok(());
+        };
+        let area = d.features.area;
+        let ratio = if t.ref_area > 0.0 && area > 0.0 {
+            area / t.ref_area
+        } else {
+            1.0
+        };
+        let whole = ratio >= cfg.appearance.whole_ratio;
+        let amodal = cfg.amodal && d.det.mask.is_some();
+        let z = if amodal && !whole {
+            // The last detection tells which side stands still if it is recent; after a longer
+            // gap the shape is reappearing.
+            let last = (t.misses < 3).then_some((&t.last.bbox, t.misses + 1));
+            let v = t.motion.velocity();
+            amodal_box(&t.predicted, &d.det.bbox, last, v, t.ref_size, &mut t.cuts)
+        } else {
+            t.cuts = [None; 2];
+            d.det.bbox
+        };
+        if cfg.reupdate_after_gap && t.misses > 0 {
+            if let Some(snap) = &t.snapshot {
+                // With amodal completion the whole shape's boxes, else the boxes as seen.
+                let (from, to) = if amodal {
+                    (&t.anchor, &z)
+                } else {
+                    (&t.last.bbox, &d.det.bbox)
+                };
+                t.motion = reupdate(snap.as_ref(), from, to, t.misses)?;
+            }
+        }
+        // A sliver (a shape mostly hidden) says little about where the whole shape is:
+        // matching it keeps the track alive, but the filter coasts on its prediction rather
+        // than having its velocity dragged by the occluder's edge. Not after a gap, when the
+        // prediction has drifted and the sliver is the only news.
+        let sliver = amodal && ratio < cfg.sliver_ratio && t.misses == 0 && t.hits >= cfg.min_hits;
+        if !sliver {
+            t.motion.update(&z)?;
+        }
+        t.anchor = t.motion.project();
+        if cfg.reupdate_after_gap {
+            t.snapshot = Some(t.motion.clone_box());
+        }
+        t.last_ratio = ratio;
+        t.last_whole = whole;
+        if area > 0.0 {
+            let b = d.det.bbox;
+            t.sizes.push(area, b.w, b.h);
+            (t.ref_area, t.ref_size) = t.sizes.reference();
+        }
+        if let Some(a) = &d.features.appearance {
+            t.appearance = Some(a.clone());
+            if whole {
+                t.reference = Some(a.clone());
+            }
+        }
+        t.hits += 1;
+        t.misses = 0;
+        t.last_frame = frame;
+        t.last = d.det.clone().into_owned();
+        t.features = Some(d.features.clone());
+        Ok(())
+    }
+
+    /// Phase 7: compute now the appearance matched tracks will need later (module docs).
+    fn refresh_appearance(
+        &mut self,
+        frame: Option<&Frame<'_>>,
+        matches: &[Pair],
+        dets: &[Prepared<'_>],
+    ) {
+        let Some(frame) = frame else {
+            return;
+        };
+        if self.needs.is_empty() || matches.is_empty() {
+            return;
+        }
+        let crowded = self.crowded_next_frame();
+        let refresh = self.config.appearance.refresh;
+        for m in matches {
+            let Some(d) = dets.get(m.det) else {
+                continue;
+            };
+            if d.features.appearance.is_some() || d.det.mask.is_none() {
+                continue;
+            }
+            let Some(t) = self.tracks.get(m.track) else {
+                continue;
+            };
+            let whole = t.last_whole;
+            let stale = t
+                .reference
+                .as_ref()
+                .is_none_or(|r| self.frame.saturating_sub(r.frame) >= refresh);
+            let near = crowded.get(m.track).copied().unwrap_or(false);
+            if !(near || (whole && stale) || t.appearance.is_none()) {
+                continue;
+            }
+            let a = self.appearance_of(frame, &d.det);
+            if let (Some(a), Some(t)) = (a, self.tracks.get_mut(m.track)) {
+                t.appearance = Some(a.clone());
+                if whole {
+                    t.reference = Some(a);
+                }
+            }
+        }
+    }
+
+    /// Which tracks' search regions in the next frame meet another track's: their next
+    /// frame's clusters will be ambiguous, and their appearance must be taken now.
+    fn crowded_next_frame(&self) -> Vec<bool> {
+        let boxes: Vec<BBox> = self
+            .tracks
+            .iter()
+            .map(|t| {
+                let v = t.motion.velocity();
+                let next = t.anchor.translated(v.x, v.y);
+                let f = self.margin_factor(t);
+                let m = f * (next.w.max(1.0) * next.h.max(1.0)).sqrt();
+                next.expanded(m)
+            })
+            .collect();
+        let mut crowded = vec![false; boxes.len()];
+        for (i, j) in overlapping_box_pairs(&boxes, &boxes, 0.0) {
+            if i != j {
+                crowded[i] = true;
+                crowded[j] = true;
+            }
+        }
+        crowded
+    }
+
+    /// Phase 8: unmatched tracks miss a frame; lost ones past `max_lost` are removed.
     fn age_lost(&mut self, matched: &[bool]) {
         let cfg = &self.config;
         for (i, t) in self.tracks.iter_mut().enumerate() {
@@ -546,10 +985,67 @@ impl Tracker {
         self.tracks.retain(|t| t.state != TrackState::Removed);
     }
 
-    /// Phase 7: confident unmatched detections start tentative tracks (confirmed at once when
+    /// Phase 9: report confirmed tracks missed right after a whole view at their predicted
+    /// place ([`Config::coast_frames`]).
+    fn coast(&self, out: &mut Vec<TrackedShape>) {
+        let cfg = &self.config;
+        if cfg.coast_frames == 0 {
+            return;
+        }
+        for t in &self.tracks {
+            let Some(id) = t.id else {
+                continue;
+            };
+            if t.state != TrackState::Lost || t.misses > cfg.coast_frames || !t.last_whole {
+                continue;
+            }
+            let s = t.predicted_shift();
+            if !(s.x.is_finite() && s.y.is_finite()) {
+                continue;
+            }
+            let (mask, bbox) = match &t.last.mask {
+                Some(m) => {
+                    let (dx, dy) = (
+                        s.x.round().clamp(-1e6, 1e6) as i32,
+                        s.y.round().clamp(-1e6, 1e6) as i32,
+                    );
+                    let mut moved = m.translated(dx, dy);
+                    if let Some((w, h)) = self.frame_size {
+                        moved = moved.clipped(w, h);
+                    }
+                    if moved.is_empty() {
+                        continue;
+                    }
+                    let b = moved.bbox();
+                    (Some(moved), b)
+                }
+                None => (None, t.predicted),
+            };
+            let centroid = t
+                .features
+                .as_ref()
+                .map_or(t.predicted.center(), |f| f.centroid);
+            out.push(TrackedShape {
+                id,
+                frame: self.frame,
+                bbox,
+                mask,
+                centroid: centroid + s,
+                state: TrackState::Lost,
+                score: t.last.score,
+                class: t.last.class,
+                cost: 0.0,
+                det_index: None,
+                interpolated: true,
+            });
+        }
+    }
+
+    /// Phase 10: confident unmatched detections start tentative tracks (confirmed at once when
     /// `min_hits` is 1).
     fn spawn(
         &mut self,
+        frame: Option<&Frame<'_>>,
         dets: &[Prepared<'_>],
         det_used: &[bool],
         out: &mut Vec<TrackedShape>,
@@ -571,16 +1067,36 @@ impl Tracker {
                 continue;
             }
             let motion = (self.motion)(&d.det.bbox)?;
+            // Every track carries an appearance from birth, so that in an ambiguous cluster
+            // no track's pairs lack the appearance terms that its rivals' pairs have.
+            let appearance = match (&d.features.appearance, frame) {
+                (Some(a), _) => Some(a.clone()),
+                (None, Some(f)) if !self.needs.is_empty() => self.appearance_of(f, &d.det),
+                _ => None,
+            };
             let mut t = Track {
                 id: None,
                 state: TrackState::Tentative,
                 predicted: d.det.bbox,
+                anchor: d.det.bbox,
+                ref_area: d.features.area,
+                ref_size: (d.det.bbox.w, d.det.bbox.h),
+                sizes: {
+                    let mut s = Sizes::default();
+                    s.push(d.features.area, d.det.bbox.w, d.det.bbox.h);
+                    s
+                },
+                cuts: [None; 2],
+                last_ratio: 1.0,
+                last_whole: true,
+                reference: appearance.clone(),
+                appearance,
                 snapshot: self.config.reupdate_after_gap.then(|| motion.clone_box()),
                 motion,
                 hits: 1,
                 misses: 0,
                 last_frame: self.frame,
-                last: d.det.clone(),
+                last: d.det.clone().into_owned(),
                 features: Some(d.features.clone()),
                 pending: Vec::new(),
             };
@@ -598,6 +1114,187 @@ impl Tracker {
         }
         Ok(())
     }
+}
+
+/// A mask detection reaching outside the frame, clipped to it (`None` when nothing is left);
+/// detections inside the frame, box detections and frame-less calls are passed through.
+/// An empty mask is dropped: it carries no shape.
+fn clip_to_frame<'a>(det: &'a Detection, frame: Option<&Frame<'_>>) -> Option<Cow<'a, Detection>> {
+    let Some(m) = det.mask.as_ref() else {
+        return Some(Cow::Borrowed(det));
+    };
+    if m.is_empty() {
+        return None;
+    }
+    let Some(f) = frame else {
+        return Some(Cow::Borrowed(det));
+    };
+    let (w, h) = (f.width() as i64, f.height() as i64);
+    let inside = m.x() >= 0
+        && m.y() >= 0
+        && m.x() as i64 + m.width() as i64 <= w
+        && m.y() as i64 + m.height() as i64 <= h;
+    if inside {
+        return Some(Cow::Borrowed(det));
+    }
+    let clipped = m.clipped(f.width(), f.height());
+    if clipped.is_empty() {
+        return None;
+    }
+    Some(Cow::Owned(Detection {
+        bbox: clipped.bbox(),
+        mask: Some(clipped),
+        score: det.score,
+        class: det.class,
+    }))
+}
+
+/// Which side of a partly hidden shape an occluder covers, on one axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Cut {
+    /// The low side (left or top): the high side is seen and anchors the completion.
+    Low,
+    /// The high side (right or bottom).
+    High,
+    /// Both sides (or undecided): complete around the detection's centre.
+    Both,
+}
+
+/// The whole shape's box for a partly hidden detection `d` (amodal completion): on each axis
+/// where `d` is clearly shorter than the reference size `(rw, rh)` of the whole shape, `d` is
+/// extended to it away from the occluded side.
+///
+/// The occluded side is decided once per occlusion, when the axis first needs completion, and
+/// kept in `cuts` until the shape is seen whole again (deciding anew every frame would compare
+/// with a prediction the occlusion has already dragged):
+/// - a shape reappearing after a gap (`last` is `None`) shows its leading part first: the side
+///   behind it along its velocity `v` is hidden;
+/// - otherwise, comparing with the last detection `last` (seen `n` frames ago), per frame: the
+///   side that stood still while the other moved (held by a static occluder: a bar, the frame
+///   border); else
+///   the side that strayed from moving with the shape's velocity (a moving occluder); else the
+///   side that disagrees with the prediction `p`;
+/// - else both sides: the view is a part of the shape that could lie anywhere in it, and the
+///   completed box keeps the prediction's centre on that axis.
+///
+/// The reference size, not the prediction, is the target, so the completed box cannot shrink
+/// with the view.
+fn amodal_box(
+    p: &BBox,
+    d: &BBox,
+    last: Option<(&BBox, u32)>,
+    v: Point,
+    (rw, rh): (f64, f64),
+    cuts: &mut [Option<Cut>; 2],
+) -> BBox {
+    fn axis(
+        (p0, pw): (f64, f64),
+        (d0, dw): (f64, f64),
+        last: Option<(f64, f64, f64)>,
+        v: f64,
+        rw: f64,
+        cut: &mut Option<Cut>,
+    ) -> (f64, f64) {
+        let tol = (0.1 * rw).max(3.0);
+        if !(rw.is_finite() && p0.is_finite() && pw.is_finite() && dw < rw - tol) {
+            // Not cut on this axis now: a later cut is a new occlusion, decided afresh.
+            *cut = None;
+            return (d0, dw);
+        }
+        let side = *cut.get_or_insert_with(|| {
+            // Motion along this axis that tells leading from trailing: over half a pixel per
+            // frame and a third of the shape's overall speed would do; keep it simple.
+            let moving = v.abs() >= 0.5;
+            let Some((l0, lw, k)) = last else {
+                return match (moving, v > 0.0) {
+                    (false, _) => Cut::Both,
+                    (true, true) => Cut::Low,
+                    (true, false) => Cut::High,
+                };
+            };
+            // Side motion since the last frame: an occluder that does not move (a bar, the
+            // frame border) holds its side still while the other follows the shape.
+            let (s0, s1) = ((d0 - l0) / k, (d0 + dw - (l0 + lw)) / k);
+            let step = (0.5 * v.abs()).max(1.0);
+            if moving && s0.abs() + step <= s1.abs() && s0.abs() <= 1.0 {
+                return Cut::Low;
+            }
+            if moving && s1.abs() + step <= s0.abs() && s1.abs() <= 1.0 {
+                return Cut::High;
+            }
+            // A moving occluder: the side that strayed from moving with the shape.
+            let (m0, m1) = ((s0 - v).abs(), (s1 - v).abs());
+            if m1 + step <= m0 {
+                return Cut::Low;
+            }
+            if m0 + step <= m1 {
+                return Cut::High;
+            }
+            // Last, the side that disagrees with the prediction (displacements inwards).
+            let (e0, e1) = (d0 - p0, (p0 + pw) - (d0 + dw));
+            if e1.abs() + tol <= e0 {
+                Cut::Low
+            } else if e0.abs() + tol <= e1 {
+                Cut::High
+            } else {
+                Cut::Both
+            }
+        });
+        match side {
+            Cut::Low => (d0 + dw - rw, rw),
+            Cut::High => (d0, rw),
+            // No side to anchor on: the view is a cut-down part of the shape that could lie
+            // anywhere in it, so it says nothing about the centre on this axis; keep the
+            // prediction's.
+            Cut::Both => (p0 + pw / 2.0 - rw / 2.0, rw),
+        }
+    }
+    let [cx, cy] = cuts;
+    let k = |n: u32| n.max(1) as f64;
+    let (x, w) = axis(
+        (p.x, p.w),
+        (d.x, d.w),
+        last.map(|(l, n)| (l.x, l.w, k(n))),
+        v.x,
+        rw,
+        cx,
+    );
+    let (y, h) = axis(
+        (p.y, p.h),
+        (d.y, d.h),
+        last.map(|(l, n)| (l.y, l.h, k(n))),
+        v.y,
+        rh,
+        cy,
+    );
+    BBox::new(x, y, w, h)
+}
+
+/// A track's search shell in mask mode: its last shell moved by the predicted displacement
+/// (swept along it when the track is lost or moves more than half its size per frame, so a
+/// detection found part-way still meets it), merged with the predicted box (which, with amodal
+/// completion, covers the whole shape even when the last view was partial), grown by
+/// `factor` times the predicted box's geometric mean size.
+fn search_shell(t: &Track, factor: f64) -> ConvexShell {
+    let p = t.predicted;
+    let shift = t.predicted_shift();
+    let base = match t.features.as_ref().and_then(|f| f.shell.as_deref()) {
+        Some(s) => s.clone(),
+        None => ConvexShell::from_bbox(&t.anchor).unwrap_or_default(),
+    };
+    let size = (p.w.max(1.0) * p.h.max(1.0)).sqrt();
+    let fast = shift.x.hypot(shift.y) > 0.5 * size;
+    let moved = if fast || t.misses > 0 {
+        base.swept(shift.x, shift.y)
+    } else {
+        base.translated(shift.x, shift.y)
+    };
+    let mut pts = moved.vertices().to_vec();
+    if p.is_valid() {
+        pts.extend(p.corners());
+    }
+    let merged = ConvexShell::from_points(&pts).unwrap_or(moved);
+    merged.grown(factor * size)
 }
 
 /// OC-SORT's observation-centric re-update: a track matched again after `misses` unmatched
