@@ -88,6 +88,8 @@ pub struct Track {
     pub(crate) last_frame: u32,
     pub(crate) last: Detection,
     pub(crate) features: Option<Features>,
+    /// Last frame a shape was reported under the track's id (matched or coasted).
+    pub(crate) reported_until: u32,
     /// Shapes matched while tentative, reported if the track is confirmed.
     pub(crate) pending: Vec<TrackedShape>,
 }

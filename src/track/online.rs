@@ -577,6 +577,44 @@ impl Tracker {
                 .collect()
         };
         let main = fill(&self.costs, regions);
+        if std::env::var("DUMP").is_ok()
+            || std::env::var("DBG_FRAME")
+                .ok()
+                .and_then(|v| v.parse::<u32>().ok())
+                == Some(self.frame)
+        {
+            for (k, &(t, d)) in regions.pairs.iter().enumerate() {
+                let tr = &self.tracks[t];
+                let mut raw: Vec<String> = self
+                    .costs
+                    .terms()
+                    .iter()
+                    .map(|w| format!("{:.4}", w.term.cost(tr, &cands[d]).unwrap_or(f64::NAN)))
+                    .collect();
+                raw.extend(
+                    self.reid_costs
+                        .terms()
+                        .iter()
+                        .map(|w| format!("{:.4}", w.term.cost(tr, &cands[d]).unwrap_or(f64::NAN))),
+                );
+                let c = &regions.clusters[regions.pair_cluster[k]];
+                let e = main.iter().find(|e| e.0 == t && e.1 == d);
+                eprintln!(
+                    "DUMP {} {} {} {} {} {} {} {} {:.4} {:.4} {}",
+                    self.frame,
+                    tr.id().map_or(-1, |i| i as i64),
+                    tr.last_frame(),
+                    cands[d].index,
+                    tr.misses(),
+                    c.tracks.len(),
+                    c.dets.len(),
+                    e.is_some() as u8,
+                    e.map_or(f64::NAN, |e| e.2),
+                    e.map_or(f64::NAN, |e| e.3),
+                    raw.join(" ")
+                );
+            }
+        }
         let reid = if self.reid_costs.terms().is_empty() {
             None
         } else {
@@ -728,6 +766,7 @@ impl Tracker {
                     t.state = TrackState::Confirmed;
                     if let Some(id) = t.id {
                         out.push(shape(id, TrackState::Confirmed));
+                        t.reported_until = frame;
                     }
                 }
             }
@@ -748,7 +787,9 @@ impl Tracker {
                     self.tracks[m.track].state = TrackState::Removed;
                     let l = &mut self.tracks[lost];
                     l.hits += hits.saturating_sub(1);
-                    l.pending = pending;
+                    // Frames the lost track was already reported in (coasting) keep that shape.
+                    let until = l.reported_until;
+                    l.pending = pending.into_iter().filter(|s| s.frame > until).collect();
                     lost
                 }
                 None => {
@@ -774,6 +815,7 @@ impl Tracker {
             }
             t.pending = Vec::new();
             out.push(shape_of(frame, id, TrackState::Confirmed, d, m.cost));
+            t.reported_until = frame;
         }
         Ok(matched)
     }
@@ -838,14 +880,18 @@ impl Tracker {
         };
         let whole = ratio >= cfg.appearance.whole_ratio;
         let amodal = cfg.amodal && d.det.mask.is_some();
-        let z = if amodal && !whole {
+        let z = if amodal {
             // The last detection tells which side stands still if it is recent; after a longer
             // gap the shape is reappearing.
-            let last = (t.misses < 3).then_some((&t.last.bbox, t.misses + 1));
+            let last = (t.misses < REAPPEAR_GAP).then_some((&t.last.bbox, t.misses + 1));
+            if last.is_none() {
+                // A new view after a gap: the occlusion that cut the last views is over.
+                t.cuts = [None; 2];
+            }
             let v = t.motion.velocity();
-            amodal_box(&t.predicted, &d.det.bbox, last, v, t.ref_size, &mut t.cuts)
+            let (p, r) = (t.predicted, t.ref_size);
+            amodal_box(&p, &d.det.bbox, last, v, r, whole, &mut t.cuts)
         } else {
-            t.cuts = [None; 2];
             d.det.bbox
         };
         if cfg.reupdate_after_gap && t.misses > 0 {
@@ -987,12 +1033,13 @@ impl Tracker {
 
     /// Phase 9: report confirmed tracks missed right after a whole view at their predicted
     /// place ([`Config::coast_frames`]).
-    fn coast(&self, out: &mut Vec<TrackedShape>) {
+    fn coast(&mut self, out: &mut Vec<TrackedShape>) {
         let cfg = &self.config;
         if cfg.coast_frames == 0 {
             return;
         }
-        for t in &self.tracks {
+        let (frame, size) = (self.frame, self.frame_size);
+        for t in &mut self.tracks {
             let Some(id) = t.id else {
                 continue;
             };
@@ -1010,7 +1057,7 @@ impl Tracker {
                         s.y.round().clamp(-1e6, 1e6) as i32,
                     );
                     let mut moved = m.translated(dx, dy);
-                    if let Some((w, h)) = self.frame_size {
+                    if let Some((w, h)) = size {
                         moved = moved.clipped(w, h);
                     }
                     if moved.is_empty() {
@@ -1025,9 +1072,10 @@ impl Tracker {
                 .features
                 .as_ref()
                 .map_or(t.predicted.center(), |f| f.centroid);
+            t.reported_until = frame;
             out.push(TrackedShape {
                 id,
-                frame: self.frame,
+                frame,
                 bbox,
                 mask,
                 centroid: centroid + s,
@@ -1089,6 +1137,7 @@ impl Tracker {
                 cuts: [None; 2],
                 last_ratio: 1.0,
                 last_whole: true,
+                reported_until: 0,
                 reference: appearance.clone(),
                 appearance,
                 snapshot: self.config.reupdate_after_gap.then(|| motion.clone_box()),
@@ -1185,14 +1234,17 @@ fn amodal_box(
     last: Option<(&BBox, u32)>,
     v: Point,
     (rw, rh): (f64, f64),
+    whole: bool,
     cuts: &mut [Option<Cut>; 2],
 ) -> BBox {
+    #[allow(clippy::too_many_arguments)]
     fn axis(
         (p0, pw): (f64, f64),
         (d0, dw): (f64, f64),
         last: Option<(f64, f64, f64)>,
         v: f64,
         rw: f64,
+        whole: bool,
         cut: &mut Option<Cut>,
     ) -> (f64, f64) {
         let tol = (0.1 * rw).max(3.0);
@@ -1243,9 +1295,11 @@ fn amodal_box(
         match side {
             Cut::Low => (d0 + dw - rw, rw),
             Cut::High => (d0, rw),
-            // No side to anchor on: the view is a cut-down part of the shape that could lie
-            // anywhere in it, so it says nothing about the centre on this axis; keep the
-            // prediction's.
+            // No side to anchor on. A whole view (by area) is narrower because the shape
+            // turned: its centre holds. A partial view is a cut-down part of the shape that
+            // could lie anywhere in it and says nothing about the centre on this axis: keep
+            // the prediction's.
+            Cut::Both if whole => (d0 + dw / 2.0 - rw / 2.0, rw),
             Cut::Both => (p0 + pw / 2.0 - rw / 2.0, rw),
         }
     }
@@ -1257,6 +1311,7 @@ fn amodal_box(
         last.map(|(l, n)| (l.x, l.w, k(n))),
         v.x,
         rw,
+        whole,
         cx,
     );
     let (y, h) = axis(
@@ -1265,10 +1320,14 @@ fn amodal_box(
         last.map(|(l, n)| (l.y, l.h, k(n))),
         v.y,
         rh,
+        whole,
         cy,
     );
     BBox::new(x, y, w, h)
 }
+
+/// Frames without a match after which a shape's next view counts as a reappearance.
+const REAPPEAR_GAP: u32 = 3;
 
 /// A track's search shell in mask mode: its last shell moved by the predicted displacement
 /// (swept along it when the track is lost or moves more than half its size per frame, so a
