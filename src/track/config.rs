@@ -223,6 +223,13 @@ pub struct Config {
     /// detections (DeepSORT's matching cascade, in two levels). Without it, lost and active
     /// tracks compete for the high detections in one assignment. Default false.
     pub lost_second: bool,
+    /// Lost tracks are matched only by the re-identification stage (its terms, gates and
+    /// `reid_max_cost`), which then runs before the tentative tracks' stage; the main
+    /// association is for tracks seen in the previous frame. Geometric costs of a lost track
+    /// against what its prediction has drifted to mean little, and a lost track should be
+    /// recognised by its appearance, not by a detection happening to lie where it was
+    /// predicted. Default false (MOT15 boxes have no appearance); the mask preset turns it on.
+    pub lost_reid_only: bool,
     /// The pair-cost terms of the main association. Default: IoU with the predicted box, mask
     /// IoU (masks only), and shape context + colour at 0.5/0.5 (when registered, with data).
     pub terms: Terms,
@@ -293,6 +300,7 @@ impl Default for Config {
             lost_velocity_decay: 1.0,
             reupdate_after_gap: false,
             lost_second: false,
+            lost_reid_only: false,
             terms: Terms::default(),
             reid_terms: Terms::reid_default(),
             reid_at_confirmation: false,
@@ -338,8 +346,10 @@ impl Config {
             max_lost: 40,
             coast_frames: 2,
             reid_at_confirmation: true,
+            lost_reid_only: true,
             terms: Terms {
                 iou: TermConfig::weighted(1.0),
+                ioa: TermConfig::weighted(1.0),
                 mask_iou: TermConfig::weighted(1.0),
                 shape_context: TermConfig::weighted(0.5),
                 colour: TermConfig::weighted(0.5),

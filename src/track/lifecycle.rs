@@ -10,12 +10,13 @@ use crate::motion::{BoxMotionModel, MotionModel};
 /// The boxed motion filter a track owns (any [`MotionModel`] on boxes).
 pub(crate) type BoxMotion = Box<dyn BoxMotionModel>;
 
-/// The areas and box sizes of a track's last [`Sizes::LEN`] matched detections, whose medians
-/// are the reference size of the whole shape.
+/// The areas and box sizes of a track's last [`Sizes::LEN`] matched detections, whose upper
+/// quartiles are the reference size of the whole shape.
 ///
-/// A median over a window rather than a running mean over "whole" views: a partial view (an
-/// occlusion starting) shrinks the area for fewer frames than half the window and does not
-/// move the median, mask noise (erosion, dilation by a pixel or two) cancels out, and a transient
+/// An upper quantile over a window rather than a running mean over "whole" views: partial views
+/// (an occlusion starting or ending) are smaller and stay below it unless they fill three
+/// quarters of the window, mask noise (erosion, dilation by a pixel or two) mostly cancels out,
+/// and a transient
 /// outlier (two touching shapes detected as one) leaves the window after a while. A running
 /// mean fed only by views judged whole can lock up: one inflated value makes every later view
 /// look partial, and the reference never updates again.
@@ -36,7 +37,7 @@ impl Sizes {
         self.ring.push_back([area, w, h]);
     }
 
-    /// The median (lower middle value) of each of area, width and height over the window.
+    /// The upper quartile of each of area, width and height over the window.
     pub(crate) fn reference(&self) -> (f64, (f64, f64)) {
         let q = |k: usize| -> f64 {
             let mut v: Vec<f64> = self.ring.iter().map(|r| r[k]).collect();
@@ -44,7 +45,7 @@ impl Sizes {
                 return 0.0;
             }
             v.sort_by(f64::total_cmp);
-            v[(v.len() - 1) / 2]
+            v[(3 * (v.len() - 1)) / 4]
         };
         (q(0), (q(1), q(2)))
     }

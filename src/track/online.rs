@@ -647,7 +647,17 @@ impl Tracker {
         let high = |d: &Prepared<'_>| d.high;
         let low = |d: &Prepared<'_>| !d.high;
         let main = &scores.main;
-        if cfg.lost_second {
+        if cfg.lost_reid_only {
+            self.stage(
+                main,
+                &recent,
+                dets,
+                &high,
+                cfg.max_cost,
+                &mut used,
+                &mut out,
+            )?;
+        } else if cfg.lost_second {
             self.stage(
                 main,
                 &recent,
@@ -679,10 +689,18 @@ impl Tracker {
             &mut out,
         )?;
         let max_t = cfg.max_cost_tentative;
-        self.stage(main, &tentative, dets, &high, max_t, &mut used, &mut out)?;
-        if let Some(reid) = &scores.reid {
-            let max_r = cfg.reid_max_cost;
-            self.stage(reid, &lost, dets, &high, max_r, &mut used, &mut out)?;
+        let max_r = cfg.reid_max_cost;
+        if cfg.lost_reid_only {
+            // Lost tracks are re-identified before tentative tracks take what is left.
+            if let Some(reid) = &scores.reid {
+                self.stage(reid, &lost, dets, &high, max_r, &mut used, &mut out)?;
+            }
+            self.stage(main, &tentative, dets, &high, max_t, &mut used, &mut out)?;
+        } else {
+            self.stage(main, &tentative, dets, &high, max_t, &mut used, &mut out)?;
+            if let Some(reid) = &scores.reid {
+                self.stage(reid, &lost, dets, &high, max_r, &mut used, &mut out)?;
+            }
         }
         Ok(out)
     }
@@ -1254,18 +1272,29 @@ fn amodal_box(
             return (d0, dw);
         }
         let side = *cut.get_or_insert_with(|| {
-            // Motion along this axis that tells leading from trailing: over half a pixel per
-            // frame and a third of the shape's overall speed would do; keep it simple.
+            // The side that disagrees with the prediction (displacements inwards).
+            let (e0, e1) = (d0 - p0, (p0 + pw) - (d0 + dw));
+            let by_prediction = if e1.abs() + tol <= e0 {
+                Some(Cut::Low)
+            } else if e0.abs() + tol <= e1 {
+                Some(Cut::High)
+            } else {
+                None
+            };
+            // Motion along this axis that tells leading from trailing.
             let moving = v.abs() >= 0.5;
             let Some((l0, lw, k)) = last else {
-                return match (moving, v > 0.0) {
+                // After a gap the prediction is the only reference; a shape reappearing right
+                // where predicted shows its leading part first.
+                return by_prediction.unwrap_or(match (moving, v > 0.0) {
                     (false, _) => Cut::Both,
                     (true, true) => Cut::Low,
                     (true, false) => Cut::High,
-                };
+                });
             };
-            // Side motion since the last frame: an occluder that does not move (a bar, the
-            // frame border) holds its side still while the other follows the shape.
+            // Side motion per frame since the last detection: an occluder that does not move
+            // (a bar, the frame border) holds its side still while the other follows the
+            // shape; the prediction may already lag behind.
             let (s0, s1) = ((d0 - l0) / k, (d0 + dw - (l0 + lw)) / k);
             let step = (0.5 * v.abs()).max(1.0);
             if moving && s0.abs() + step <= s1.abs() && s0.abs() <= 1.0 {
@@ -1282,15 +1311,7 @@ fn amodal_box(
             if m0 + step <= m1 {
                 return Cut::High;
             }
-            // Last, the side that disagrees with the prediction (displacements inwards).
-            let (e0, e1) = (d0 - p0, (p0 + pw) - (d0 + dw));
-            if e1.abs() + tol <= e0 {
-                Cut::Low
-            } else if e0.abs() + tol <= e1 {
-                Cut::High
-            } else {
-                Cut::Both
-            }
+            by_prediction.unwrap_or(Cut::Both)
         });
         match side {
             Cut::Low => (d0 + dw - rw, rw),
