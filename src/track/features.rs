@@ -95,6 +95,10 @@ pub struct AppearanceConfig {
     /// reference refresh). `false` computes it for every mask detection (for comparisons).
     /// Default true.
     pub lazy: bool,
+    /// A cluster is ambiguous (its detections get appearance) when geometry and motion alone
+    /// rank two candidates of a track (or of a detection) within this much of each other.
+    /// Default 0.2 (costs are in `[0, 1]`).
+    pub ambiguity: f64,
     /// A track's reference appearance (used to re-identify it after a loss) is recomputed when
     /// it is older than this many frames and the shape is seen whole. Default 10.
     pub refresh: u32,
@@ -123,6 +127,7 @@ impl Default for AppearanceConfig {
                 ..ShapeContextConfig::default()
             },
             lazy: true,
+            ambiguity: 0.2,
             refresh: 10,
             whole_ratio: 0.85,
         }
@@ -150,6 +155,10 @@ impl AppearanceConfig {
                 "invalid shape context config",
             )
         })?;
+        let a = self.ambiguity;
+        if !(a.is_finite() && a >= 0.0) {
+            return Err(("appearance.ambiguity", a, "must be finite and ≥ 0"));
+        }
         let r = self.whole_ratio;
         if !(r.is_finite() && (0.0..=1.0).contains(&r)) {
             return Err(("appearance.whole_ratio", r, "must be in [0, 1]"));

@@ -161,13 +161,6 @@ struct Pair {
 /// cost thresholds compare (see [`PairScore`]).
 type Edge = (usize, usize, f64, f64);
 
-/// The allowed pairs of one frame, sparse: a track only has the few candidates its region
-/// estimate found, so nothing here is `tracks × detections`.
-struct Scores {
-    main: Vec<Edge>,
-    reid: Option<Vec<Edge>>,
-}
-
 /// Which tracks and detections the assignment stages have taken so far.
 struct Used {
     tracks: Vec<bool>,
@@ -376,8 +369,8 @@ impl Tracker {
         self.predict();
         let regions = self.estimate_regions(&dets);
         self.describe(frame, &regions, &mut dets);
-        let scores = self.score_pairs(&regions, &dets);
-        let matches = self.assign(&scores, &dets)?;
+        let main = self.score(&self.costs, &regions, &dets, |_| true);
+        let matches = self.assign(frame, &main, &regions, &mut dets)?;
         let mut out = Vec::new();
         let matched_tracks = self.update_matched(&matches, &dets, &mut out)?;
         self.refresh_appearance(frame, &matches, &dets);
@@ -507,7 +500,16 @@ impl Tracker {
         Regions::from(region_clusters(&track_shells, &det_shells))
     }
 
-    /// Phase 3: appearance for the detections of ambiguous clusters (module docs).
+    /// Phase 3: appearance for the detections geometry cannot decide (module docs).
+    ///
+    /// A region cluster is ambiguous when, by the geometric and motion terms alone, one of its
+    /// tracks has two candidate detections (or a detection two candidate tracks) whose costs
+    /// pass `max_cost` and lie within `appearance.ambiguity` of each other; then every
+    /// detection of the cluster is described. A 1×1 cluster, or a crossing that geometry
+    /// already resolves, costs no appearance at all. With [`Config::lost_reid_only`], lost
+    /// tracks do not take part in the main association and do not count: the
+    /// re-identification stage describes the detections it needs once the others have taken
+    /// theirs.
     fn describe(&self, frame: Option<&Frame<'_>>, regions: &Regions, dets: &mut [Prepared<'_>]) {
         let Some(frame) = frame else {
             return;
@@ -515,15 +517,60 @@ impl Tracker {
         if self.needs.is_empty() {
             return;
         }
-        let mut want = vec![!self.config.appearance.lazy; dets.len()];
+        let want = if self.config.appearance.lazy {
+            self.ambiguous(regions, dets)
+        } else {
+            vec![true; dets.len()]
+        };
+        for (d, w) in dets.iter_mut().zip(want) {
+            if w && d.features.appearance.is_none() {
+                d.features.appearance = self.appearance_of(frame, &d.det);
+            }
+        }
+    }
+
+    /// Which detections lie in an ambiguous cluster (see [`Tracker::describe`]).
+    fn ambiguous(&self, regions: &Regions, dets: &[Prepared<'_>]) -> Vec<bool> {
+        let reid_only = self.config.lost_reid_only;
+        let counted = |t: usize| {
+            self.tracks
+                .get(t)
+                .is_some_and(|t| !(reid_only && t.state == TrackState::Lost))
+        };
+        // Detections carry no appearance yet, so the appearance terms have no data here.
+        let geometric = self.score(&self.costs, regions, dets, |&(t, _)| counted(t));
+        let max = self.config.max_cost;
+        let margin = self.config.appearance.ambiguity;
+        // Best and second-best passing cost per track and per detection.
+        let mut best_t = vec![(f64::INFINITY, f64::INFINITY); self.tracks.len()];
+        let mut best_d = vec![(f64::INFINITY, f64::INFINITY); dets.len()];
+        let push = |b: &mut (f64, f64), c: f64| {
+            if c < b.0 {
+                *b = (c, b.0);
+            } else if c < b.1 {
+                b.1 = c;
+            }
+        };
+        for &(t, d, _, gate) in &geometric {
+            if gate <= max {
+                push(&mut best_t[t], gate);
+                push(&mut best_d[d], gate);
+            }
+        }
+        let close = |b: &(f64, f64)| b.1.is_finite() && b.1 - b.0 < margin;
+        let mut want = vec![false; dets.len()];
         for c in &regions.clusters {
-            let ambiguous = c.tracks.len() > 1
-                || c.dets.len() > 1
-                || c.tracks.iter().any(|&t| {
-                    self.tracks
-                        .get(t)
-                        .is_some_and(|t| t.state == TrackState::Lost)
-                });
+            let ambiguous = c
+                .tracks
+                .iter()
+                .any(|&t| counted(t) && best_t.get(t).is_some_and(close))
+                || c.dets.iter().any(|&d| best_d.get(d).is_some_and(close))
+                || (!reid_only
+                    && c.tracks.iter().any(|&t| {
+                        self.tracks
+                            .get(t)
+                            .is_some_and(|t| t.state == TrackState::Lost)
+                    }));
             if ambiguous {
                 for &d in &c.dets {
                     if let Some(w) = want.get_mut(d) {
@@ -532,11 +579,7 @@ impl Tracker {
                 }
             }
         }
-        for (d, w) in dets.iter_mut().zip(want) {
-            if w && d.features.appearance.is_none() {
-                d.features.appearance = self.appearance_of(frame, &d.det);
-            }
-        }
+        want
     }
 
     /// The appearance of one detection (`None` without a mask, or if the extractor fails).
@@ -548,9 +591,15 @@ impl Tracker {
         }
     }
 
-    /// Phase 4: the combined cost of every candidate pair (sparse): the main association's,
-    /// and the re-identification stage's (lost tracks only).
-    fn score_pairs(&self, regions: &Regions, dets: &[Prepared<'_>]) -> Scores {
+    /// Phase 4: the combined cost under `model` of the candidate pairs of `regions` that
+    /// `keep` accepts (sparse: a track only has the few candidates its region estimate found).
+    fn score(
+        &self,
+        model: &CostModel,
+        regions: &Regions,
+        dets: &[Prepared<'_>],
+        keep: impl Fn(&(usize, usize)) -> bool,
+    ) -> Vec<Edge> {
         let cands: Vec<Candidate<'_>> = dets
             .iter()
             .map(|d| Candidate {
@@ -564,76 +613,42 @@ impl Tracker {
             let (tc, dc) = (self.tracks[t].last.class, dets[d].det.class);
             tc < 0 || dc < 0 || tc == dc
         };
-        let fill = |model: &CostModel, regions: &Regions| -> Vec<Edge> {
-            let scores = model.score_pairs(&self.tracks, &cands, regions);
+        let kept: Vec<usize> = (0..regions.pairs.len())
+            .filter(|&k| keep(&regions.pairs[k]))
+            .collect();
+        let sub;
+        let regions = if kept.len() == regions.pairs.len() {
             regions
-                .pairs
-                .iter()
-                .zip(scores)
-                .filter_map(|(&(t, d), s): (&(usize, usize), Option<PairScore>)| {
-                    let s = s.filter(|_| same_class(t, d))?;
-                    Some((t, d, s.cost, s.absolute))
-                })
-                .collect()
-        };
-        let main = fill(&self.costs, regions);
-        if std::env::var("DUMP").is_ok()
-            || std::env::var("DBG_FRAME")
-                .ok()
-                .and_then(|v| v.parse::<u32>().ok())
-                == Some(self.frame)
-        {
-            for (k, &(t, d)) in regions.pairs.iter().enumerate() {
-                let tr = &self.tracks[t];
-                let mut raw: Vec<String> = self
-                    .costs
-                    .terms()
-                    .iter()
-                    .map(|w| format!("{:.4}", w.term.cost(tr, &cands[d]).unwrap_or(f64::NAN)))
-                    .collect();
-                raw.extend(
-                    self.reid_costs
-                        .terms()
-                        .iter()
-                        .map(|w| format!("{:.4}", w.term.cost(tr, &cands[d]).unwrap_or(f64::NAN))),
-                );
-                let c = &regions.clusters[regions.pair_cluster[k]];
-                let e = main.iter().find(|e| e.0 == t && e.1 == d);
-                eprintln!(
-                    "DUMP {} {} {} {} {} {} {} {} {:.4} {:.4} {}",
-                    self.frame,
-                    tr.id().map_or(-1, |i| i as i64),
-                    tr.last_frame(),
-                    cands[d].index,
-                    tr.misses(),
-                    c.tracks.len(),
-                    c.dets.len(),
-                    e.is_some() as u8,
-                    e.map_or(f64::NAN, |e| e.2),
-                    e.map_or(f64::NAN, |e| e.3),
-                    raw.join(" ")
-                );
-            }
-        }
-        let reid = if self.reid_costs.terms().is_empty() {
-            None
         } else {
-            let lost = |t: usize| self.tracks[t].state == TrackState::Lost;
-            let pairs: Vec<usize> = (0..regions.pairs.len())
-                .filter(|&k| lost(regions.pairs[k].0))
-                .collect();
-            let sub = Regions {
-                pairs: pairs.iter().map(|&k| regions.pairs[k]).collect(),
-                pair_cluster: pairs.iter().map(|&k| regions.pair_cluster[k]).collect(),
+            sub = Regions {
+                pairs: kept.iter().map(|&k| regions.pairs[k]).collect(),
+                pair_cluster: kept.iter().map(|&k| regions.pair_cluster[k]).collect(),
                 clusters: regions.clusters.clone(),
             };
-            Some(fill(&self.reid_costs, &sub))
+            &sub
         };
-        Scores { main, reid }
+        let scores = model.score_pairs(&self.tracks, &cands, regions);
+        regions
+            .pairs
+            .iter()
+            .zip(scores)
+            .filter_map(|(&(t, d), s): (&(usize, usize), Option<PairScore>)| {
+                let s = s.filter(|_| same_class(t, d))?;
+                Some((t, d, s.cost, s.absolute))
+            })
+            .collect()
     }
 
-    /// Phase 5: the assignment stages (module docs).
-    fn assign(&self, scores: &Scores, dets: &[Prepared<'_>]) -> Result<Vec<Pair>, TrackError> {
+    /// Phase 5: the assignment stages (module docs). The re-identification stage is scored
+    /// when its turn comes, on the lost tracks' pairs with detections nobody took, which are
+    /// described first if they need appearance.
+    fn assign(
+        &self,
+        frame: Option<&Frame<'_>>,
+        main: &[Edge],
+        regions: &Regions,
+        dets: &mut [Prepared<'_>],
+    ) -> Result<Vec<Pair>, TrackError> {
         let cfg = &self.config;
         let mut used = Used {
             tracks: vec![false; self.tracks.len()],
@@ -646,63 +661,63 @@ impl Tracker {
         let tentative = |t: &Track| t.state == TrackState::Tentative;
         let high = |d: &Prepared<'_>| d.high;
         let low = |d: &Prepared<'_>| !d.high;
-        let main = &scores.main;
-        if cfg.lost_reid_only {
-            self.stage(
-                main,
-                &recent,
-                dets,
-                &high,
-                cfg.max_cost,
-                &mut used,
-                &mut out,
-            )?;
-        } else if cfg.lost_second {
-            self.stage(
-                main,
-                &recent,
-                dets,
-                &high,
-                cfg.max_cost,
-                &mut used,
-                &mut out,
-            )?;
-            self.stage(main, &lost, dets, &high, cfg.max_cost, &mut used, &mut out)?;
-        } else {
-            self.stage(
-                main,
-                &active,
-                dets,
-                &high,
-                cfg.max_cost,
-                &mut used,
-                &mut out,
-            )?;
-        }
-        self.stage(
-            main,
-            &recent,
-            dets,
-            &low,
-            cfg.max_cost_low,
-            &mut used,
-            &mut out,
-        )?;
+        let (max, max_low) = (cfg.max_cost, cfg.max_cost_low);
         let max_t = cfg.max_cost_tentative;
-        let max_r = cfg.reid_max_cost;
+        if cfg.lost_reid_only {
+            self.stage(main, &recent, dets, &high, max, &mut used, &mut out)?;
+        } else if cfg.lost_second {
+            self.stage(main, &recent, dets, &high, max, &mut used, &mut out)?;
+            self.stage(main, &lost, dets, &high, max, &mut used, &mut out)?;
+        } else {
+            self.stage(main, &active, dets, &high, max, &mut used, &mut out)?;
+        }
+        self.stage(main, &recent, dets, &low, max_low, &mut used, &mut out)?;
         if cfg.lost_reid_only {
             // Lost tracks are re-identified before tentative tracks take what is left.
-            if let Some(reid) = &scores.reid {
-                self.stage(reid, &lost, dets, &high, max_r, &mut used, &mut out)?;
-            }
+            self.reid_stage(frame, regions, dets, &mut used, &mut out)?;
             self.stage(main, &tentative, dets, &high, max_t, &mut used, &mut out)?;
         } else {
             self.stage(main, &tentative, dets, &high, max_t, &mut used, &mut out)?;
-            if let Some(reid) = &scores.reid {
-                self.stage(reid, &lost, dets, &high, max_r, &mut used, &mut out)?;
-            }
+            self.reid_stage(frame, regions, dets, &mut used, &mut out)?;
         }
         Ok(out)
+    }
+
+    /// The re-identification stage: lost tracks × high detections nobody took.
+    fn reid_stage(
+        &self,
+        frame: Option<&Frame<'_>>,
+        regions: &Regions,
+        dets: &mut [Prepared<'_>],
+        used: &mut Used,
+        out: &mut Vec<Pair>,
+    ) -> Result<(), TrackError> {
+        if self.reid_costs.terms().is_empty() {
+            return Ok(());
+        }
+        let high: Vec<bool> = dets.iter().map(|d| d.high).collect();
+        let wanted = |&(t, d): &(usize, usize)| {
+            self.tracks[t].state == TrackState::Lost
+                && !used.tracks[t]
+                && !used.dets[d]
+                && high.get(d).copied().unwrap_or(false)
+        };
+        if let (Some(frame), false) = (frame, self.needs.is_empty()) {
+            let mut need = vec![false; dets.len()];
+            for p in regions.pairs.iter().filter(|p| wanted(p)) {
+                need[p.1] = true;
+            }
+            for (d, n) in dets.iter_mut().zip(need) {
+                if n && d.features.appearance.is_none() {
+                    d.features.appearance = self.appearance_of(frame, &d.det);
+                }
+            }
+        }
+        let reid = self.score(&self.reid_costs, regions, dets, wanted);
+        let lost = |t: &Track| t.state == TrackState::Lost;
+        let is_high = |d: &Prepared<'_>| d.high;
+        let max_r = self.config.reid_max_cost;
+        self.stage(&reid, &lost, dets, &is_high, max_r, used, out)
     }
 
     /// One assignment stage: the unused tracks and detections that pass the filters, pairs
@@ -1000,18 +1015,23 @@ impl Tracker {
         }
     }
 
-    /// Which tracks' search regions in the next frame meet another track's: their next
-    /// frame's clusters will be ambiguous, and their appearance must be taken now.
+    /// Which tracks' boxes will touch another track's by the next frame: their next frame's
+    /// clusters are likely to be ambiguous, and their appearance must be taken now. Only the
+    /// tracks the main association will consider count (not lost ones with
+    /// [`Config::lost_reid_only`], whose wide search regions would make every track crowded).
     fn crowded_next_frame(&self) -> Vec<bool> {
+        let counted = |t: &Track| !(self.config.lost_reid_only && t.state == TrackState::Lost);
         let boxes: Vec<BBox> = self
             .tracks
             .iter()
             .map(|t| {
+                if !counted(t) {
+                    return BBox::new(f64::NAN, f64::NAN, 0.0, 0.0);
+                }
+                // Boxes that will touch by the next frame, give or take one frame of motion.
                 let v = t.motion.velocity();
                 let next = t.anchor.translated(v.x, v.y);
-                let f = self.margin_factor(t);
-                let m = f * (next.w.max(1.0) * next.h.max(1.0)).sqrt();
-                next.expanded(m)
+                next.expanded(v.x.hypot(v.y).min(next.w.max(next.h)))
             })
             .collect();
         let mut crowded = vec![false; boxes.len()];
