@@ -269,6 +269,10 @@ pub struct Config {
     /// confirmed track's reference area (a sliver at an occluder's edge) does not correct the
     /// motion filter: the track keeps its predicted motion through the occlusion. Default 0.4.
     pub sliver_ratio: f64,
+    /// Merge a matched mask detection with an unmatched one it touches, when together they
+    /// make up the track's whole shape and no other track can take the second (a shape split
+    /// in two by the detector). Default false; the mask preset turns it on.
+    pub merge_fragments: bool,
     /// Frames a confirmed track that was last seen whole may go undetected and still be
     /// reported, at its predicted place with its last mask moved by the predicted motion
     /// (`interpolated: true`, `state: Lost`, no detection index): a shape seen whole cannot
@@ -318,6 +322,7 @@ impl Default for Config {
             sift_min_keypoints: 3,
             amodal: true,
             sliver_ratio: 0.4,
+            merge_fragments: false,
             coast_frames: 0,
         }
     }
@@ -346,6 +351,7 @@ impl Config {
             max_lost: 40,
             coast_frames: 2,
             reid_at_confirmation: true,
+            merge_fragments: true,
             lost_reid_only: true,
             terms: Terms {
                 iou: TermConfig::weighted(1.0),

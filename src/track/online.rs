@@ -64,7 +64,7 @@ use super::lifecycle::{BoxMotion, Sizes, Track};
 use super::regions::{estimate_regions, Regions};
 use super::TrackError;
 use crate::assign::{self, Unmatched};
-use crate::frame::{BBox, Detection, Frame, Point, TrackState, TrackedShape};
+use crate::frame::{BBox, Detection, Frame, Mask, Point, TrackState, TrackedShape};
 use crate::geometry::{overlapping_box_pairs, ConvexShell};
 use crate::motion::{BoxKalman, BoxMotionModel, MotionError, MotionFactory};
 use crate::region::region_clusters;
@@ -371,15 +371,18 @@ impl Tracker {
         self.describe(frame, &regions, &mut dets);
         let main = self.score(&self.costs, &regions, &dets, |_| true);
         let matches = self.assign(frame, &main, &regions, &mut dets)?;
+        let mut det_used = vec![false; dets.len()];
+        for m in &matches {
+            det_used[m.det] = true;
+        }
+        if self.config.merge_fragments {
+            self.merge_fragments(frame, &matches, &main, &mut dets, &mut det_used)?;
+        }
         let mut out = Vec::new();
         let matched_tracks = self.update_matched(&matches, &dets, &mut out)?;
         self.refresh_appearance(frame, &matches, &dets);
         self.age_lost(&matched_tracks);
         self.coast(&mut out);
-        let mut det_used = vec![false; dets.len()];
-        for m in &matches {
-            det_used[m.det] = true;
-        }
         self.spawn(frame, &dets, &det_used, &mut out)?;
         Ok(out)
     }
@@ -762,6 +765,89 @@ impl Tracker {
                 det: d,
                 cost: m.cost,
             });
+        }
+        Ok(())
+    }
+
+    /// Phase 5b ([`Config::merge_fragments`]): a matched mask detection smaller than its
+    /// track's whole shape, touching an unmatched detection that lies where the track is
+    /// predicted and that no other track can take, is one shape split in two by the detector:
+    /// the two are merged (mask union) before the track is updated, and the fragment starts no
+    /// track of its own.
+    fn merge_fragments(
+        &self,
+        frame: Option<&Frame<'_>>,
+        matches: &[Pair],
+        main: &[Edge],
+        dets: &mut [Prepared<'_>],
+        det_used: &mut [bool],
+    ) -> Result<(), TrackError> {
+        let max = self.config.max_cost;
+        let whole = self.config.appearance.whole_ratio;
+        for m in matches {
+            let Some(t) = self.tracks.get(m.track) else {
+                continue;
+            };
+            let ref_area = t.ref_area;
+            let (Some(md), true) = (dets.get(m.det), ref_area > 0.0) else {
+                continue;
+            };
+            if md.det.mask.is_none() || md.features.area >= whole * ref_area {
+                continue;
+            }
+            let near = t.predicted.expanded(0.1 * t.predicted.w.max(t.predicted.h));
+            let Some(m_shell) = md.features.shell.clone() else {
+                continue;
+            };
+            let mut best: Option<(usize, f64)> = None;
+            for (j, f) in dets.iter().enumerate() {
+                let free = !det_used.get(j).copied().unwrap_or(true);
+                let claimed = main
+                    .iter()
+                    .any(|&(ot, od, _, gate)| od == j && ot != m.track && gate <= max);
+                let (Some(fs), true) = (f.features.shell.as_ref(), free && !claimed) else {
+                    continue;
+                };
+                let union_area = md.features.area + f.features.area;
+                if f.det.bbox.ioa(&near) < 0.8 || union_area > 1.3 * ref_area {
+                    continue;
+                }
+                let gap = m_shell.distance(fs);
+                if gap <= FRAGMENT_GAP && best.is_none_or(|(_, g)| gap < g) {
+                    best = Some((j, gap));
+                }
+            }
+            let Some((j, _)) = best else {
+                continue;
+            };
+            let (Some(a), Some(b)) = (
+                dets.get(m.det).and_then(|d| d.det.mask.as_ref()),
+                dets.get(j).and_then(|d| d.det.mask.as_ref()),
+            ) else {
+                continue;
+            };
+            let union = mask_union(a, b);
+            let (score, class, index) = match (dets.get(m.det), dets.get(j)) {
+                (Some(a), Some(b)) => (a.det.score.max(b.det.score), a.det.class, a.index),
+                _ => continue,
+            };
+            let merged = Detection {
+                bbox: union.bbox(),
+                mask: Some(union),
+                score,
+                class,
+            };
+            let features = self
+                .extractor
+                .extract(frame, &merged)
+                .map_err(|message| TrackError::Features { index, message })?;
+            if let Some(d) = dets.get_mut(m.det) {
+                d.det = Cow::Owned(merged);
+                d.features = features;
+            }
+            if let Some(u) = det_used.get_mut(j) {
+                *u = true;
+            }
         }
         Ok(())
     }
@@ -1365,6 +1451,26 @@ fn amodal_box(
         cy,
     );
     BBox::new(x, y, w, h)
+}
+
+/// Largest gap, in pixels, between the shells of a detection and a fragment merged into it.
+const FRAGMENT_GAP: f64 = 3.0;
+
+/// The union of two masks, in the bitmap of their joint rectangle.
+fn mask_union(a: &Mask, b: &Mask) -> Mask {
+    let x0 = a.x().min(b.x());
+    let y0 = a.y().min(b.y());
+    let x1 = (a.x() as i64 + a.width() as i64).max(b.x() as i64 + b.width() as i64);
+    let y1 = (a.y() as i64 + a.height() as i64).max(b.y() as i64 + b.height() as i64);
+    let (w, h) = ((x1 - x0 as i64) as u32, (y1 - y0 as i64) as u32);
+    let mut bits = vec![0u8; w as usize * h as usize];
+    for (x, y) in a.pixels().chain(b.pixels()) {
+        let i = (y - y0) as usize * w as usize + (x - x0) as usize;
+        if let Some(v) = bits.get_mut(i) {
+            *v = 1;
+        }
+    }
+    Mask::new(x0, y0, w, h, bits).unwrap_or_else(|_| a.clone())
 }
 
 /// Frames without a match after which a shape's next view counts as a reappearance.
