@@ -5,7 +5,7 @@
 //! so a JSON config only needs the fields it changes: `{"max_lost": 60}` is a valid config.
 
 use super::appearance::ShapeVariant;
-use super::features::AppearanceConfig;
+use super::features::{AppearanceConfig, Needs};
 use super::TrackError;
 use crate::features::sift::MatchConfig;
 use crate::motion::BoxKalmanParams;
@@ -465,6 +465,17 @@ impl Config {
                 reason,
             })?;
         Ok(())
+    }
+
+    /// The appearance parts the enabled terms read (the tracker computes only those).
+    pub fn appearance_needs(&self) -> Needs {
+        let on = |f: fn(&Terms) -> f64| f(&self.terms) > 0.0 || f(&self.reid_terms) > 0.0;
+        let shape = on(|t| t.shape_context.weight);
+        Needs {
+            shape,
+            sift: on(|t| t.sift.weight) || (shape && self.shape_variant == ShapeVariant::Sift),
+            colour: on(|t| t.colour.weight),
+        }
     }
 
     /// Reads a config from JSON; missing fields take their defaults, unknown fields are errors.

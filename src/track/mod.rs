@@ -35,7 +35,7 @@ pub use cost::{
 };
 pub use features::{Appearance, AppearanceConfig, MaskFeatures, Needs, ShellMode};
 pub use lifecycle::Track;
-pub use online::{BoxFeatures, FeatureExtractor, Features, Tracker};
+pub use online::{BoxFeatures, FeatureExtractor, Features, PhaseTimes, Tracker};
 pub use regions::{estimate_regions, Cluster, Regions};
 pub use sequence::{detections_by_frame, to_records, track_sequence};
 

@@ -54,9 +54,7 @@
 use std::borrow::Cow;
 use std::sync::Arc;
 
-use super::appearance::{
-    ColourCost, ColourMode, ShapeContextCost, ShapeVariant, SiftCost, TrackSide,
-};
+use super::appearance::{ColourCost, ColourMode, ShapeContextCost, SiftCost, TrackSide};
 use super::config::{Config, Terms};
 use super::cost::{Candidate, CostModel, PairCost, PairScore};
 use super::features::{Appearance, MaskFeatures, Needs};
@@ -181,6 +179,43 @@ pub struct Tracker {
     next_id: u64,
     /// Size of the frames seen so far (width, height).
     frame_size: Option<(u32, u32)>,
+    /// A clock (seconds) for [`Tracker::phase_times`]; `None`: no timing.
+    clock: Option<Clock>,
+    times: PhaseTimes,
+    /// Seconds spent describing appearance since the clock started (read around phases).
+    appearance_time: std::cell::Cell<f64>,
+    /// Seconds spent scoring re-identification pairs (inside the assignment phase).
+    reid_score_time: std::cell::Cell<f64>,
+}
+
+/// A monotonic clock in seconds, supplied by the caller: the core never reads the time
+/// itself (`std::time::Instant` panics on wasm32-unknown-unknown).
+type Clock = Box<dyn Fn() -> f64 + Send>;
+
+/// Where a tracker's time went, accumulated over the frames since timing started (see
+/// [`Tracker::with_clock`]), in seconds. The phases partition [`Tracker::update`]'s time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct PhaseTimes {
+    /// Frames timed.
+    pub frames: u64,
+    /// Per-detection features: validation, centroids and shells, and every appearance
+    /// description (SIFT, contour descriptor, colour sample), wherever it was asked for.
+    pub features: f64,
+    /// Motion prediction and region estimation (shells, broad phase, GJK, clusters).
+    pub regions: f64,
+    /// Pair costs: the ambiguity test, the main association's and re-identification's terms.
+    pub costs: f64,
+    /// The assignment stages (optimal assignment per stage).
+    pub assignment: f64,
+    /// Track updates: fragments, filters, lifecycle, coasting, spawning.
+    pub update: f64,
+}
+
+impl PhaseTimes {
+    /// Total time over the frames.
+    pub fn total(&self) -> f64 {
+        self.features + self.regions + self.costs + self.assignment + self.update
+    }
 }
 
 impl std::fmt::Debug for Tracker {
@@ -234,17 +269,6 @@ fn register_appearance(
     );
 }
 
-/// The appearance parts the terms of `config` read.
-fn needs_of(config: &Config) -> Needs {
-    let on = |f: fn(&Terms) -> f64| f(&config.terms) > 0.0 || f(&config.reid_terms) > 0.0;
-    let shape = on(|t| t.shape_context.weight);
-    Needs {
-        shape,
-        sift: on(|t| t.sift.weight) || (shape && config.shape_variant == ShapeVariant::Sift),
-        colour: on(|t| t.colour.weight),
-    }
-}
-
 impl Tracker {
     /// A tracker with the terms of `config` (geometry, motion and appearance), the
     /// constant-velocity box Kalman filter and the [`MaskFeatures`] extractor (which gives box
@@ -273,7 +297,7 @@ impl Tracker {
             TrackSide::Reference,
             ColourMode::Contained,
         );
-        let needs = needs_of(&config);
+        let needs = config.appearance_needs();
         Ok(Self {
             costs,
             reid_costs,
@@ -285,6 +309,10 @@ impl Tracker {
             frame: 0,
             next_id: 1,
             frame_size: None,
+            clock: None,
+            times: PhaseTimes::default(),
+            appearance_time: std::cell::Cell::new(0.0),
+            reid_score_time: std::cell::Cell::new(0.0),
         })
     }
 
@@ -297,6 +325,23 @@ impl Tracker {
             Ok(Box::new(factory.init(z)?))
         });
         self
+    }
+
+    /// Times the phases of every [`Tracker::update`] with `clock` (a monotonic time in
+    /// seconds, e.g. from `std::time::Instant` natively or `performance.now()` in a browser);
+    /// see [`Tracker::phase_times`].
+    pub fn with_clock<C>(mut self, clock: C) -> Self
+    where
+        C: Fn() -> f64 + Send + 'static,
+    {
+        self.clock = Some(Box::new(clock));
+        self.times = PhaseTimes::default();
+        self
+    }
+
+    /// Time spent per phase since [`Tracker::with_clock`] (all zero without a clock).
+    pub fn phase_times(&self) -> PhaseTimes {
+        self.times
     }
 
     /// Replaces the feature extractor. The tracker still asks it for appearance only where
@@ -361,16 +406,27 @@ impl Tracker {
                 });
             }
         }
+        // Checkpoints: (time, appearance time so far, re-identification scoring so far).
+        let mark = |s: &Self| {
+            s.now()
+                .map(|t| (t, s.appearance_time.get(), s.reid_score_time.get()))
+        };
+        let m0 = mark(self);
         let mut dets = self.prepare(frame, detections)?;
         if size.is_some() {
             self.frame_size = size;
         }
         self.frame += 1;
+        let m1 = mark(self);
         self.predict();
         let regions = self.estimate_regions(&dets);
+        let m2 = mark(self);
         self.describe(frame, &regions, &mut dets);
+        let m3 = mark(self);
         let main = self.score(&self.costs, &regions, &dets, |_| true);
+        let m4 = mark(self);
         let matches = self.assign(frame, &main, &regions, &mut dets)?;
+        let m5 = mark(self);
         let mut det_used = vec![false; dets.len()];
         for m in &matches {
             det_used[m.det] = true;
@@ -384,6 +440,27 @@ impl Tracker {
         self.age_lost(&matched_tracks);
         self.coast(&mut out);
         self.spawn(frame, &dets, &det_used, &mut out)?;
+        if let (Some(m0), Some(m1), Some(m2), Some(m3), Some(m4), Some(m5), Some(m6)) =
+            (m0, m1, m2, m3, m4, m5, mark(self))
+        {
+            // Time and appearance time of the interval between two checkpoints.
+            let span = |a: (f64, f64, f64), b: (f64, f64, f64)| (b.0 - a.0, b.1 - a.1, b.2 - a.2);
+            let (prepare, ..) = span(m0, m1);
+            let (regions, ..) = span(m1, m2);
+            let (describe, ..) = span(m2, m3);
+            let (score, ..) = span(m3, m4);
+            let (assign, app_assign, reid) = span(m4, m5);
+            let (update, app_update, _) = span(m5, m6);
+            // Appearance described outside the describe phase (re-identification, refresh,
+            // new tracks) counts as features, not as the phase that asked for it.
+            let p = &mut self.times;
+            p.frames += 1;
+            p.features += prepare + describe + app_assign + app_update;
+            p.regions += regions;
+            p.costs += score + reid;
+            p.assignment += (assign - reid - app_assign).max(0.0);
+            p.update += (update - app_update).max(0.0);
+        }
         Ok(out)
     }
 
@@ -588,10 +665,21 @@ impl Tracker {
     /// The appearance of one detection (`None` without a mask, or if the extractor fails).
     fn appearance_of(&self, frame: &Frame<'_>, det: &Detection) -> Option<Arc<Appearance>> {
         det.mask.as_ref()?;
-        match self.extractor.describe(frame, det, self.frame) {
+        let t0 = self.now();
+        let a = match self.extractor.describe(frame, det, self.frame) {
             Ok(a) => a.map(Arc::new),
             Err(_) => None,
+        };
+        if let (Some(t0), Some(t1)) = (t0, self.now()) {
+            self.appearance_time
+                .set(self.appearance_time.get() + (t1 - t0));
         }
+        a
+    }
+
+    /// The clock's time, when timing.
+    fn now(&self) -> Option<f64> {
+        self.clock.as_ref().map(|c| c())
     }
 
     /// Phase 4: the combined cost under `model` of the candidate pairs of `regions` that
@@ -716,7 +804,12 @@ impl Tracker {
                 }
             }
         }
+        let t0 = self.now();
         let reid = self.score(&self.reid_costs, regions, dets, wanted);
+        if let (Some(t0), Some(t1)) = (t0, self.now()) {
+            self.reid_score_time
+                .set(self.reid_score_time.get() + (t1 - t0));
+        }
         let lost = |t: &Track| t.state == TrackState::Lost;
         let is_high = |d: &Prepared<'_>| d.high;
         let max_r = self.config.reid_max_cost;
