@@ -44,7 +44,8 @@ pub struct Args {
     /// Output format (default: MOT for `.txt`).
     #[arg(long, value_enum)]
     pub format: Option<Format>,
-    /// Tracker configuration (JSON; missing fields take their defaults).
+    /// Tracker configuration (JSON; missing fields take their defaults: `Config::default()`
+    /// for boxes, `Config::masks()` for MOTS masks).
     #[arg(long)]
     pub config: Option<PathBuf>,
 }
@@ -86,6 +87,29 @@ fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
         })
 }
 
+/// `base` with the fields given in the JSON `text` replaced (nested objects merge field by
+/// field); unknown fields are errors, as in [`Config::from_json`].
+fn config_over(base: &Config, text: &str) -> Result<Config, serde_json::Error> {
+    fn merge(a: &mut serde_json::Value, b: serde_json::Value) {
+        match (a, b) {
+            (serde_json::Value::Object(a), serde_json::Value::Object(b)) => {
+                for (k, v) in b {
+                    match a.get_mut(&k) {
+                        Some(slot) => merge(slot, v),
+                        None => {
+                            a.insert(k, v);
+                        }
+                    }
+                }
+            }
+            (a, b) => *a = b,
+        }
+    }
+    let mut value = serde_json::to_value(base)?;
+    merge(&mut value, serde_json::from_str(text)?);
+    serde_json::from_value(value)
+}
+
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
     if args.offline {
@@ -95,15 +119,22 @@ pub fn run(args: Args) -> crate::CliResult {
                 .into(),
         );
     }
-    let config = match &args.config {
-        Some(p) => {
-            Config::from_json(&read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?
-        }
-        None => Config::default(),
-    };
     let det_name = args.det.display().to_string();
     let text = read_text(&args.det)?;
     let mots = is_mots(&text);
+    // Masks get the mask preset (appearance, amodal completion, re-identification by colour
+    // and SIFT when frames are given); a JSON config fills its missing fields from it too.
+    let base = if mots {
+        Config::masks()
+    } else {
+        Config::default()
+    };
+    let config = match &args.config {
+        Some(p) => {
+            config_over(&base, &read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?
+        }
+        None => base,
+    };
     let records = if mots {
         parse_mots(&text, &det_name)?
     } else {
@@ -201,4 +232,25 @@ pub fn run(args: Args) -> crate::CliResult {
         fps
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_config_overrides_only_its_fields() {
+        let base = Config::masks();
+        let c = config_over(
+            &base,
+            r#"{"max_lost": 7, "terms": {"iou": {"weight": 2.0}}}"#,
+        )
+        .unwrap();
+        assert_eq!(c.max_lost, 7);
+        assert_eq!(c.terms.iou.weight, 2.0);
+        assert_eq!(c.terms.ioa, base.terms.ioa);
+        assert_eq!(c.coast_frames, base.coast_frames);
+        assert!(config_over(&base, r#"{"max_lots": 7}"#).is_err());
+        assert!(config_over(&base, "not json").is_err());
+    }
 }
