@@ -1,8 +1,8 @@
 //! The online tracker: one [`Tracker::update`] per frame, in named phases.
 //!
 //! ```text
-//! prepare → predict → estimate regions → describe → score pairs → assign → update matched
-//!   → refresh appearance → age lost → coast → spawn
+//! prepare → predict → estimate regions → describe → score pairs → assign → merge fragments
+//!   → update matched → refresh appearance → age lost → coast → spawn
 //! ```
 //!
 //! - **prepare**: validate the detections and the frame (typed errors, before any state
@@ -17,26 +17,34 @@
 //!   grown by the same margin, meets the detections' shells by GJK
 //!   ([`crate::region::region_clusters`]). Only pairs inside a cluster are ever scored.
 //! - **describe**: appearance (shape context, SIFT, colour: only the parts the enabled terms
-//!   read) for the detections of *ambiguous* clusters only: more than one track or detection,
-//!   or a lost track to re-identify. A 1×1 cluster is decided by geometry and motion alone.
-//! - **score pairs**: the [`CostModel`] combines the enabled [`PairCost`] terms per pair.
-//! - **assign**: optimal assignment in three stages (ByteTrack-style): (1) confirmed and lost
-//!   tracks × high detections, (2) tracks still unmatched that were matched last frame × low
-//!   detections, (3) tentative tracks × the remaining high detections.
+//!   read) for the detections of clusters that geometry cannot decide: a track with two
+//!   candidates (or a detection with two tracks) whose geometric costs are close. A 1×1
+//!   cluster, or a crossing that motion already resolves, costs no appearance.
+//! - **score pairs**: the [`CostModel`] combines the enabled [`PairCost`] terms per pair;
+//!   cluster-normalised terms (C1, C2) rank pairs, thresholds compare the others.
+//! - **assign**: optimal assignment in stages (ByteTrack-style): (1) confirmed (and, unless
+//!   [`Config::lost_reid_only`], lost) tracks × high detections, (2) tracks matched last frame
+//!   × low detections, (3) tentative tracks × the remaining high detections, and the
+//!   re-identification stage, lost tracks × high detections nobody took, scored then (its
+//!   detections described then), before (3) with `lost_reid_only` and after it otherwise.
+//! - **merge fragments** ([`Config::merge_fragments`]): a detector-split shape is put back
+//!   together before its track is updated.
 //! - **update matched**: filters correct (with the amodal box of a partly hidden mask, see
-//!   [`Config::amodal`]), tentative tracks with enough hits are confirmed and get an id, lost
+//!   [`Config::amodal`]), tentative tracks with enough hits are confirmed and get an id (or,
+//!   with [`Config::reid_at_confirmation`], the id of a lost track they re-identify), lost
 //!   tracks are re-identified under their old id; appearance computed this frame becomes the
 //!   track's last (and, if the shape was seen whole, reference) appearance.
 //! - **refresh appearance**: a matched track's appearance is computed now when it will be
-//!   needed and this frame is the last chance to see it: when its next search region meets
-//!   another track's (a crossing is coming), or when its reference appearance is missing or
-//!   older than `appearance.refresh` frames while the shape is seen whole (so a track lost
-//!   behind an occluder is re-identified by a whole view).
+//!   needed and this frame is the last chance to see it: when its box will touch another
+//!   track's by the next frame (a crossing is coming), or when its reference appearance is
+//!   missing or older than `appearance.refresh` frames while the shape is seen whole (so a
+//!   track lost behind an occluder is re-identified by a whole view).
 //! - **age lost**: unmatched tracks become lost, and are removed after `max_lost` frames
 //!   (tentative ones after `max_tentative_misses`).
 //! - **coast**: with [`Config::coast_frames`], confirmed tracks that were seen whole and missed
 //!   for at most that many frames are reported at their predicted place.
-//! - **spawn**: confident unmatched detections start tentative tracks.
+//! - **spawn**: confident unmatched detections start tentative tracks, each with an
+//!   appearance (so that no track lacks the appearance terms its rivals have).
 //!
 //! **What is reported.** Each call returns the confirmed tracks matched in this frame, with the
 //! matched detection's box, mask and score (boxes are never invented online). With
