@@ -1,0 +1,224 @@
+// The stage: the video frame on one canvas and the overlay (masks, boxes, ids, trails) on a
+// second one above it, so a selection change redraws only the overlay.
+
+import { colorOf } from '../lib/colors.js';
+
+/**
+ * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
+ * @typedef {import('../model/tracks.js').TrackTable} TrackTable
+ * @typedef {{ x: number, y: number, width: number, height: number, data: Uint8Array }} Bitmap
+ * @typedef {(rle: NonNullable<TrackRecord['mask']>) => Bitmap} MaskDecoder
+ * @typedef {{ masks: boolean, boxes: boolean, trails: boolean, gt: boolean }} ViewOptions
+ * @typedef {{ a: number | null, b: number | null }} Selection
+ */
+
+/** Frames of history a trail shows. */
+const TRAIL = 40;
+
+export class Stage {
+  /**
+   * @param {HTMLCanvasElement} frameCanvas
+   * @param {HTMLCanvasElement} overlayCanvas
+   * @param {MaskDecoder} decode
+   */
+  constructor(frameCanvas, overlayCanvas, decode) {
+    this.frameCanvas = frameCanvas;
+    this.overlay = overlayCanvas;
+    this.decode = decode;
+    this.fctx = /** @type {CanvasRenderingContext2D} */ (frameCanvas.getContext('2d', { alpha: false }));
+    this.octx = /** @type {CanvasRenderingContext2D} */ (overlayCanvas.getContext('2d'));
+    /**
+     * Decoded, tinted masks by record object: edits make new record objects, so a renamed
+     * track gets its new colour without any invalidation logic.
+     * @type {WeakMap<TrackRecord, { canvas: OffscreenCanvas, bitmap: Bitmap } | null>}
+     */
+    this.maskCache = new WeakMap();
+    this.width = frameCanvas.width;
+    this.height = frameCanvas.height;
+  }
+
+  /** @param {number} width @param {number} height */
+  resize(width, height) {
+    if (width === this.width && height === this.height) return;
+    this.width = width;
+    this.height = height;
+    for (const c of [this.frameCanvas, this.overlay]) {
+      c.width = width;
+      c.height = height;
+    }
+  }
+
+  /** Draws a frame and releases its bitmap. @param {ImageBitmap} bitmap */
+  showFrame(bitmap) {
+    this.fctx.drawImage(bitmap, 0, 0, this.width, this.height);
+    bitmap.close();
+  }
+
+  /** A neutral frame when the pixels are not available (e.g. webcam history). */
+  blank() {
+    this.fctx.fillStyle = '#0b0c0e';
+    this.fctx.fillRect(0, 0, this.width, this.height);
+  }
+
+  /**
+   * @param {TrackRecord} r
+   * @returns {{ canvas: OffscreenCanvas, bitmap: Bitmap } | null}
+   */
+  mask(r) {
+    if (!r.mask) return null;
+    let m = this.maskCache.get(r);
+    if (m === undefined) {
+      m = null;
+      const bm = this.decode(r.mask);
+      if (bm.width > 0 && bm.height > 0) {
+        const canvas = new OffscreenCanvas(bm.width, bm.height);
+        const ctx = /** @type {OffscreenCanvasRenderingContext2D} */ (canvas.getContext('2d'));
+        const img = ctx.createImageData(bm.width, bm.height);
+        const [cr, cg, cb] = colorOf(r.id).rgb;
+        const px = img.data;
+        for (let i = 0; i < bm.data.length; i++) {
+          if (bm.data[i]) {
+            px[i * 4] = cr;
+            px[i * 4 + 1] = cg;
+            px[i * 4 + 2] = cb;
+            px[i * 4 + 3] = 255;
+          }
+        }
+        ctx.putImageData(img, 0, 0);
+        m = { canvas, bitmap: bm };
+      }
+      this.maskCache.set(r, m);
+    }
+    return m;
+  }
+
+  /**
+   * Redraws the overlay for one frame.
+   * @param {{ table: TrackTable, gt: TrackTable | null, frame: number, selection: Selection, options: ViewOptions }} args
+   */
+  drawOverlay({ table, gt, frame, selection, options }) {
+    const ctx = this.octx;
+    ctx.clearRect(0, 0, this.width, this.height);
+    const records = table.at(frame);
+    const selected = (/** @type {number} */ id) => id === selection.a || id === selection.b;
+    const anySelected = selection.a !== null;
+    const line = Math.max(1.5, this.width / 640);
+    if (options.masks) {
+      for (const r of records) {
+        const m = this.mask(r);
+        if (!m) continue;
+        ctx.globalAlpha = selected(r.id) ? 0.6 : anySelected ? 0.18 : 0.4;
+        ctx.drawImage(m.canvas, m.bitmap.x, m.bitmap.y);
+      }
+      ctx.globalAlpha = 1;
+    }
+    if (options.trails) {
+      for (const r of records) this.drawTrail(table, r.id, frame, selected(r.id), line);
+    }
+    if (options.gt && gt) {
+      ctx.setLineDash([6, 4]);
+      ctx.lineWidth = line;
+      ctx.strokeStyle = 'rgba(255,255,255,0.8)';
+      for (const g of gt.at(frame)) ctx.strokeRect(g.bbox.x, g.bbox.y, g.bbox.w, g.bbox.h);
+      ctx.setLineDash([]);
+    }
+    const font = Math.round(Math.max(11, this.width / 90));
+    ctx.font = `600 ${font}px system-ui, sans-serif`;
+    ctx.textBaseline = 'top';
+    for (const r of records) {
+      const { css } = colorOf(r.id);
+      const sel = selected(r.id);
+      const b = r.bbox;
+      if (options.boxes || sel) {
+        ctx.lineWidth = sel ? line * 2 : line;
+        ctx.strokeStyle = css;
+        ctx.globalAlpha = anySelected && !sel ? 0.5 : 1;
+        ctx.strokeRect(b.x, b.y, b.w, b.h);
+      }
+      const label = r.interpolated ? `${r.id}*` : String(r.id);
+      const tw = ctx.measureText(label).width + 8;
+      const ty = b.y - font - 4 >= 0 ? b.y - font - 4 : b.y;
+      ctx.fillStyle = css;
+      ctx.fillRect(b.x, ty, tw, font + 4);
+      ctx.fillStyle = '#111';
+      ctx.fillText(label, b.x + 4, ty + 2);
+      ctx.globalAlpha = 1;
+    }
+  }
+
+  /**
+   * @param {TrackTable} table
+   * @param {number} id
+   * @param {number} frame
+   * @param {boolean} sel
+   * @param {number} line
+   */
+  drawTrail(table, id, frame, sel, line) {
+    const ctx = this.octx;
+    const t = table.byId.get(id);
+    if (!t) return;
+    /** @type {Array<[number, number]>} */
+    const pts = [];
+    for (let f = Math.max(1, frame - TRAIL); f <= frame; f++) {
+      const r = t.get(f);
+      if (r) pts.push([r.bbox.x + r.bbox.w / 2, r.bbox.y + r.bbox.h / 2]);
+    }
+    if (pts.length < 2) return;
+    ctx.strokeStyle = colorOf(id).css;
+    ctx.lineWidth = sel ? line * 1.6 : line;
+    ctx.lineCap = 'round';
+    for (let i = 1; i < pts.length; i++) {
+      ctx.globalAlpha = 0.15 + (0.75 * i) / pts.length;
+      ctx.beginPath();
+      ctx.moveTo(pts[i - 1][0], pts[i - 1][1]);
+      ctx.lineTo(pts[i][0], pts[i][1]);
+      ctx.stroke();
+    }
+    ctx.globalAlpha = 1;
+  }
+
+  /**
+   * Image coordinates of a pointer event on the overlay.
+   * @param {MouseEvent} e
+   */
+  toImage(e) {
+    const r = this.overlay.getBoundingClientRect();
+    return {
+      x: ((e.clientX - r.left) / r.width) * this.width,
+      y: ((e.clientY - r.top) / r.height) * this.height,
+    };
+  }
+
+  /**
+   * The track under an image point: inside a mask first, else inside a box; the smallest wins,
+   * so a shape in front of a larger one can still be picked.
+   * @param {TrackTable} table
+   * @param {number} frame
+   * @param {{ x: number, y: number }} p
+   * @returns {number | null}
+   */
+  hit(table, frame, p) {
+    let inMask = null;
+    let inBox = null;
+    let maskArea = Infinity;
+    let boxArea = Infinity;
+    for (const r of table.at(frame)) {
+      const b = r.bbox;
+      if (p.x < b.x || p.y < b.y || p.x >= b.x + b.w || p.y >= b.y + b.h) continue;
+      const area = b.w * b.h;
+      if (area < boxArea) {
+        boxArea = area;
+        inBox = r.id;
+      }
+      const bm = this.mask(r)?.bitmap;
+      if (!bm) continue;
+      const lx = Math.floor(p.x) - bm.x;
+      const ly = Math.floor(p.y) - bm.y;
+      if (lx >= 0 && ly >= 0 && lx < bm.width && ly < bm.height && bm.data[ly * bm.width + lx] && area < maskArea) {
+        maskArea = area;
+        inMask = r.id;
+      }
+    }
+    return inMask ?? inBox;
+  }
+}

@@ -1,0 +1,122 @@
+// The page ↔ tracker-worker protocol. Every request carries an `id`; the worker answers each
+// one exactly once, with `{ id, ok: true, ...result }` or `{ id, ok: false, error }`. Frames
+// travel as ImageBitmaps, transferred both ways (no copies): the page sends a video frame, the
+// worker writes its pixels into wasm memory and sends the bitmap back with the result, so the
+// page draws the very frame the overlay belongs to.
+
+/**
+ * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
+ *
+ * @typedef {{ kind: 'synth', preset?: string } | { kind: 'frames', width: number, height: number }} SourceSpec
+ *
+ * @typedef {{
+ *   source: SourceSpec,
+ *   detector: string,
+ *   tracker?: Record<string, unknown>,
+ *   detectorOptions?: Record<string, unknown>,
+ * }} OpenRequest
+ *
+ * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string }} OpenResult
+ *
+ * @typedef {{ detect: number, track: number, total: number }} Timings milliseconds in the worker
+ *
+ * @typedef {{
+ *   frame: number,
+ *   bitmap: ImageBitmap | null,
+ *   shapes: TrackRecord[],
+ *   detections: number,
+ *   groundTruth: TrackRecord[] | null,
+ *   timings: Timings,
+ * }} StepResult
+ *
+ * @typedef {{ type: 'open' } & OpenRequest
+ *   | { type: 'step', frame: number, bitmap?: ImageBitmap, display?: boolean }
+ *   | { type: 'render', frame: number }
+ *   | { type: 'finish' }
+ *   | { type: 'tracks' }
+ *   | { type: 'close' }} Request
+ */
+
+/**
+ * The page's handle on the tracker worker: promise-based requests over postMessage.
+ */
+export class WorkerClient {
+  /** @param {Worker} worker */
+  constructor(worker) {
+    this.worker = worker;
+    this.nextId = 1;
+    /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void }>} */
+    this.pending = new Map();
+    worker.addEventListener('message', (e) => this.onMessage(e.data));
+    worker.addEventListener('error', (e) => this.failAll(new Error(e.message || 'worker failed to load')));
+    worker.addEventListener('messageerror', () => this.failAll(new Error('worker message could not be decoded')));
+  }
+
+  /** @param {any} msg */
+  onMessage(msg) {
+    const p = this.pending.get(msg.id);
+    if (!p) return;
+    this.pending.delete(msg.id);
+    if (msg.ok) p.resolve(msg);
+    else p.reject(new Error(msg.error));
+  }
+
+  /** @param {Error} err */
+  failAll(err) {
+    for (const p of this.pending.values()) p.reject(err);
+    this.pending.clear();
+  }
+
+  /**
+   * @template T
+   * @param {Request} req
+   * @param {Transferable[]} [transfer]
+   * @returns {Promise<T>}
+   */
+  request(req, transfer = []) {
+    const id = this.nextId++;
+    return new Promise((resolve, reject) => {
+      this.pending.set(id, { resolve, reject });
+      this.worker.postMessage({ ...req, id }, transfer);
+    });
+  }
+
+  /** @param {OpenRequest} req @returns {Promise<OpenResult>} */
+  open(req) {
+    return this.request({ type: 'open', ...req });
+  }
+
+  /**
+   * Tracks one frame. For a synthetic source the worker renders the frame itself.
+   * @param {number} frame 1-based
+   * @param {ImageBitmap} [bitmap] the frame's pixels (transferred), for video and image sources
+   * @param {boolean} [display] whether to send a bitmap back for display
+   * @returns {Promise<StepResult>}
+   */
+  step(frame, bitmap, display = true) {
+    return this.request({ type: 'step', frame, bitmap, display }, bitmap ? [bitmap] : []);
+  }
+
+  /** A synthetic frame for display (scrubbing), without tracking it. @param {number} frame */
+  render(frame) {
+    return /** @type {Promise<{ bitmap: ImageBitmap, groundTruth: TrackRecord[] | null }>} */ (
+      this.request({ type: 'render', frame })
+    );
+  }
+
+  /** Runs the offline pass over everything tracked so far. @returns {Promise<{ records: TrackRecord[] }>} */
+  finish() {
+    return this.request({ type: 'finish' });
+  }
+
+  terminate() {
+    this.failAll(new Error('worker terminated'));
+    this.worker.terminate();
+  }
+}
+
+/** Starts the tracker worker (a module worker: one wasm instance, single-threaded). */
+export function startWorker() {
+  const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module', name: 'shapetrack-tracker' });
+  return new WorkerClient(worker);
+}
