@@ -80,6 +80,7 @@ export class App {
       onRenumber: (to) => this.edit(() => this.model.reassign(this.need(this.selection.a), to)),
     });
     this.model.subscribe(() => {
+      this.validateSelection();
       this.scoreSoon();
       this.render();
     });
@@ -373,6 +374,13 @@ export class App {
     this.render();
   }
 
+  /** A selected track that no longer exists (merged away, deleted) is deselected. */
+  validateSelection() {
+    const has = (/** @type {number | null} */ id) => id !== null && this.model.table.has(id);
+    if (!has(this.selection.b)) this.selection.b = null;
+    if (!has(this.selection.a)) this.selection = { a: this.selection.b, b: null };
+  }
+
   deselect() {
     this.selection = { a: null, b: null };
     this.render();
@@ -402,9 +410,6 @@ export class App {
     try {
       fn();
       this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
-      // A selected track that no longer exists (merged away, deleted) is deselected.
-      if (this.selection.b !== null && !this.model.table.has(this.selection.b)) this.selection.b = null;
-      if (this.selection.a !== null && !this.model.table.has(this.selection.a)) this.selection = { a: this.selection.b, b: null };
       this.render();
       return true;
     } catch (e) {
@@ -604,7 +609,9 @@ export class App {
     const fps = this.fps.fps;
     byId('fps').textContent = fps ? `${fps.toFixed(1)} fps` : '– fps';
     byId('fps').title = `worker: detect ${this.lastTimings.detect.toFixed(1)} ms, track ${this.lastTimings.track.toFixed(1)} ms per frame`;
-    byId('play').textContent = this.playing ? '❚❚' : this.mode === 'offline' && this.tracking && !this.finished ? 'Run' : '▶';
+    const play = byId('play');
+    play.classList.toggle('playing', this.playing);
+    play.classList.toggle('run', !this.playing && this.mode === 'offline' && this.tracking && !this.finished);
   }
 
   /**
@@ -674,6 +681,11 @@ export class App {
     det.addEventListener('change', () => {
       this.detector = det.value;
       this.status(`detector: ${det.selectedOptions[0]?.text}; reopen the source to track with it`);
+    });
+    const speed = byId('speed', HTMLSelectElement);
+    speed.value = this.speed;
+    speed.addEventListener('change', () => {
+      this.speed = /** @type {'realtime' | 'max'} */ (speed.value);
     });
     const mode = byId('mode', HTMLSelectElement);
     mode.addEventListener('change', () => {

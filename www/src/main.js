@@ -20,7 +20,10 @@ async function main() {
   const { core } = await loadCore();
   const app = new App(core);
   const params = new URLSearchParams(location.search);
-  if (params.get('speed') === 'max') app.speed = 'max';
+  if (params.get('speed') === 'max') {
+    app.speed = 'max';
+    byId('speed', HTMLSelectElement).value = 'max';
+  }
   if (params.get('mode') === 'offline') {
     app.mode = 'offline';
     byId('mode', HTMLSelectElement).value = 'offline';

@@ -8,7 +8,7 @@
 
 /** @type {FormatInfo[]} */
 export const FORMATS = [
-  { id: 'mot', label: 'MOTChallenge txt', ext: 'txt', masks: false },
+  { id: 'mot', label: 'MOT txt', ext: 'txt', masks: false },
   { id: 'mots', label: 'MOTS txt', ext: 'txt', masks: true },
 ];
 

@@ -107,5 +107,5 @@ function sceneMasks() {
   };
 }
 
-registerDetector('background', 'Background subtractor', backgroundSubtractor);
-registerDetector('scene', 'Scene masks (synthetic only)', sceneMasks);
+registerDetector('background', 'Background', backgroundSubtractor);
+registerDetector('scene', 'Scene masks (demo)', sceneMasks);
