@@ -35,6 +35,21 @@ export class Stage {
     this.maskCache = new WeakMap();
     this.width = frameCanvas.width;
     this.height = frameCanvas.height;
+    // Scale both canvases to fit the stage (up or down), keeping the aspect ratio; pointer
+    // mapping reads the resulting CSS box, so it stays exact.
+    const parent = frameCanvas.parentElement;
+    if (parent) new ResizeObserver(() => this.fit()).observe(parent);
+  }
+
+  fit() {
+    const parent = this.frameCanvas.parentElement;
+    if (!parent) return;
+    const scale = Math.min(parent.clientWidth / this.width, parent.clientHeight / this.height);
+    if (!(scale > 0)) return;
+    for (const c of [this.frameCanvas, this.overlay]) {
+      c.style.width = `${Math.floor(this.width * scale)}px`;
+      c.style.height = `${Math.floor(this.height * scale)}px`;
+    }
   }
 
   /** @param {number} width @param {number} height */
@@ -46,6 +61,7 @@ export class Stage {
       c.width = width;
       c.height = height;
     }
+    this.fit();
   }
 
   /** Draws a frame and releases its bitmap. @param {ImageBitmap} bitmap */
