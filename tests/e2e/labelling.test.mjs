@@ -99,7 +99,8 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   const clickOn = async (/** @type {any} */ r, /** @type {boolean} */ shift) => {
     const box = await page.locator('#overlay').boundingBox();
     const size = await page.evaluate(() => {
-      const c = /** @type {HTMLCanvasElement} */ (document.getElementById('overlay'));
+      // The frame canvas has the image's size (the overlay has the screen's).
+      const c = /** @type {HTMLCanvasElement} */ (document.getElementById('frame'));
       return { w: c.width, h: c.height };
     });
     assert.ok(box);

@@ -112,8 +112,11 @@ test('after one visit the app loads, imports, draws and exports with the network
     const px = await page.evaluate(() => {
       const c = /** @type {HTMLCanvasElement} */ (document.getElementById('overlay'));
       const ctx = /** @type {CanvasRenderingContext2D} */ (c.getContext('2d'));
+      // The overlay has screen resolution: map image pixels through its scale (160 wide).
+      const k = c.width / 160;
+      const at = (/** @type {number} */ x, /** @type {number} */ y) => [...ctx.getImageData(Math.round(x * k), Math.round(y * k), 1, 1).data];
       // Frame 1: disc 1 centred at (60, 40).
-      return { on: [...ctx.getImageData(60, 40, 1, 1).data], off: [...ctx.getImageData(150, 5, 1, 1).data], size: [c.width, c.height] };
+      return { on: at(60, 40), off: at(150, 110) };
     });
     assert.ok(px.on[3] > 0, `mask pixel drawn (${px.on})`);
     assert.equal(px.off[3], 0);

@@ -70,6 +70,7 @@ export class App {
     this.stage = new Stage(byId('frame', HTMLCanvasElement), byId('overlay', HTMLCanvasElement), (rle) =>
       core.decodeMask(rle),
     );
+    this.stage.onResize = () => this.render();
     this.timeline = new Timeline(byId('timeline', HTMLCanvasElement), ({ id, frame, add }) => {
       if (id !== null) this.select(id, add);
       void this.seek(frame);

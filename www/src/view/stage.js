@@ -46,21 +46,34 @@ export class Stage {
     if (!parent) return;
     const scale = Math.min(parent.clientWidth / this.width, parent.clientHeight / this.height);
     if (!(scale > 0)) return;
+    const cw = Math.floor(this.width * scale);
+    const ch = Math.floor(this.height * scale);
     for (const c of [this.frameCanvas, this.overlay]) {
-      c.style.width = `${Math.floor(this.width * scale)}px`;
-      c.style.height = `${Math.floor(this.height * scale)}px`;
+      c.style.width = `${cw}px`;
+      c.style.height = `${ch}px`;
+    }
+    // The overlay has the screen's resolution, not the video's: ids and lines stay crisp and
+    // the same size at any zoom, and a 4K frame does not cost a 4K overlay.
+    const dpr = globalThis.devicePixelRatio || 1;
+    const ow = Math.max(1, Math.round(cw * dpr));
+    const oh = Math.max(1, Math.round(ch * dpr));
+    if (this.overlay.width !== ow || this.overlay.height !== oh) {
+      this.overlay.width = ow;
+      this.overlay.height = oh;
+      this.onResize?.();
     }
   }
+
+  /** Called after the overlay's resolution changed (its content is lost): redraw. */
+  onResize = /** @type {(() => void) | null} */ (null);
 
   /** @param {number} width @param {number} height */
   resize(width, height) {
     if (width === this.width && height === this.height) return;
     this.width = width;
     this.height = height;
-    for (const c of [this.frameCanvas, this.overlay]) {
-      c.width = width;
-      c.height = height;
-    }
+    this.frameCanvas.width = width;
+    this.frameCanvas.height = height;
     this.fit();
   }
 
@@ -114,11 +127,17 @@ export class Stage {
    */
   drawOverlay({ table, gt, frame, selection, options }) {
     const ctx = this.octx;
-    ctx.clearRect(0, 0, this.width, this.height);
+    const k = this.overlay.width / this.width;
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.clearRect(0, 0, this.overlay.width, this.overlay.height);
+    // Draw in image coordinates; sizes below are divided by k to stay constant on screen.
+    ctx.setTransform(k, 0, 0, k, 0, 0);
+    ctx.imageSmoothingEnabled = false;
+    const dpr = globalThis.devicePixelRatio || 1;
     const records = table.at(frame);
     const selected = (/** @type {number} */ id) => id === selection.a || id === selection.b;
     const anySelected = selection.a !== null;
-    const line = Math.max(1.5, this.width / 640);
+    const line = (1.5 * dpr) / k;
     if (options.masks) {
       for (const r of records) {
         const m = this.mask(r);
@@ -132,13 +151,13 @@ export class Stage {
       for (const r of records) this.drawTrail(table, r.id, frame, selected(r.id), line);
     }
     if (options.gt && gt) {
-      ctx.setLineDash([6, 4]);
+      ctx.setLineDash([(6 * dpr) / k, (4 * dpr) / k]);
       ctx.lineWidth = line;
       ctx.strokeStyle = 'rgba(255,255,255,0.8)';
       for (const g of gt.at(frame)) ctx.strokeRect(g.bbox.x, g.bbox.y, g.bbox.w, g.bbox.h);
       ctx.setLineDash([]);
     }
-    const font = Math.round(Math.max(11, this.width / 90));
+    const font = (12 * dpr) / k;
     ctx.font = `600 ${font}px system-ui, sans-serif`;
     ctx.textBaseline = 'top';
     for (const r of records) {
@@ -152,12 +171,14 @@ export class Stage {
         ctx.strokeRect(b.x, b.y, b.w, b.h);
       }
       const label = r.interpolated ? `${r.id}*` : String(r.id);
-      const tw = ctx.measureText(label).width + 8;
-      const ty = b.y - font - 4 >= 0 ? b.y - font - 4 : b.y;
+      const pad = (3 * dpr) / k;
+      const tw = ctx.measureText(label).width + 2 * pad;
+      const th = font + 2 * pad;
+      const ty = b.y - th >= 0 ? b.y - th : b.y;
       ctx.fillStyle = css;
-      ctx.fillRect(b.x, ty, tw, font + 4);
+      ctx.fillRect(b.x, ty, tw, th);
       ctx.fillStyle = '#111';
-      ctx.fillText(label, b.x + 4, ty + 2);
+      ctx.fillText(label, b.x + pad, ty + pad);
       ctx.globalAlpha = 1;
     }
   }
