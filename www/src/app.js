@@ -310,7 +310,7 @@ export class App {
       for (const g of res.groundTruth) this.gt.add(g);
     }
     // Ingest last: it notifies the views.
-    this.model.ingest(res.frame, res.shapes);
+    this.model.ingest(res.shapes);
   }
 
   /** Tracks the next frame if it is new, else shows it. */

@@ -120,33 +120,33 @@ test('a new edit drops the redo stack', () => {
 
 test('edits keep holding for frames the tracker has not delivered yet', () => {
   const m = new EditModel();
-  m.ingest(1, [rec(1, 1), rec(1, 2), rec(1, 3)]);
-  m.ingest(2, [rec(2, 1), rec(2, 2), rec(2, 3)]);
+  m.ingest([rec(1, 1), rec(1, 2), rec(1, 3)]);
+  m.ingest([rec(2, 1), rec(2, 2), rec(2, 3)]);
   m.merge(1, 2); // 2 is 1 from now on
   m.deleteTrack(3); // 3 is a false track
-  m.ingest(3, [rec(3, 2), rec(3, 3), rec(3, 4)]);
+  m.ingest([rec(3, 2), rec(3, 3), rec(3, 4)]);
   assert.deepEqual(layout(m.table), { 1: [1, 2, 3], 4: [3] });
   assert.equal(m.table.get(3, 1)?.bbox.y, 2);
   // Undo brings back the aliases too: tracker id 3 shows again from then on.
   m.undo();
-  m.ingest(4, [rec(4, 3)]);
+  m.ingest([rec(4, 3)]);
   assert.deepEqual(m.table.track(3).map((r) => r.frame), [1, 2, 4]);
 });
 
 test('split during tracking: later tracker frames continue the new part', () => {
   const m = new EditModel();
-  for (const f of [1, 2, 3]) m.ingest(f, [rec(f, 1)]);
+  for (const f of [1, 2, 3]) m.ingest([rec(f, 1)]);
   const fresh = m.split(1, 3);
-  m.ingest(4, [rec(4, 1)]);
+  m.ingest([rec(4, 1)]);
   assert.deepEqual(layout(m.table), { 1: [1, 2], [fresh]: [3, 4] });
 });
 
 test('a tracker id that collides with a labeller id is moved aside', () => {
   const m = new EditModel();
-  for (const f of [1, 2, 3]) m.ingest(f, [rec(f, 1)]);
+  for (const f of [1, 2, 3]) m.ingest([rec(f, 1)]);
   const fresh = m.split(1, 2); // fresh = 2
   assert.equal(fresh, 2);
-  m.ingest(4, [rec(4, 1), rec(4, 2)]); // the tracker now spawns its own track 2
+  m.ingest([rec(4, 1), rec(4, 2)]); // the tracker now spawns its own track 2
   const t = layout(m.table);
   assert.deepEqual(t[1], [1]);
   assert.deepEqual(t[2], [2, 3, 4]);
@@ -158,17 +158,17 @@ test('a tracker id that collides with a labeller id is moved aside', () => {
 
 test('renumbering during tracking follows the tracker id, merges of two keep the first', () => {
   const m = new EditModel();
-  m.ingest(1, [rec(1, 1), rec(1, 2)]);
+  m.ingest([rec(1, 1), rec(1, 2)]);
   m.reassign(1, 9);
   m.merge(9, 2);
-  m.ingest(2, [rec(2, 1), rec(2, 2)]);
+  m.ingest([rec(2, 1), rec(2, 2)]);
   assert.deepEqual(layout(m.table), { 9: [1, 2] });
   assert.equal(m.table.get(2, 9)?.bbox.y, 1);
 });
 
 test('replaceAll from the offline pass keeps edits; an import starts afresh', () => {
   const m = new EditModel();
-  m.ingest(1, [rec(1, 1), rec(1, 2)]);
+  m.ingest([rec(1, 1), rec(1, 2)]);
   m.merge(1, 2);
   m.replaceAll([rec(1, 1), rec(2, 2)], { fromTracker: true });
   assert.deepEqual(layout(m.table), { 1: [1, 2] });
@@ -187,4 +187,13 @@ test('listeners hear every change', () => {
   off();
   m.undo();
   assert.equal(n, 3);
+});
+
+test('one update may report earlier frames (a track confirmed late)', () => {
+  const m = new EditModel();
+  m.ingest([rec(1, 1)]);
+  m.ingest([rec(2, 1)]);
+  // Frame 3 confirms track 2 and reports its tentative frames 1 and 2 too.
+  m.ingest([rec(3, 1), rec(1, 2), rec(2, 2), rec(3, 2)]);
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3], 2: [1, 2, 3] });
 });

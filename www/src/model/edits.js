@@ -105,14 +105,14 @@ export class EditModel {
   }
 
   /**
-   * Adds one frame of tracker output (replacing what that frame had). Not an edit: it does not
-   * enter the undo history, but it goes through the aliases so past edits keep holding.
-   * @param {number} frame
+   * Adds tracker output. Not an edit: it does not enter the undo history, but it goes through
+   * the aliases so past edits keep holding. One update may report several frames (a track
+   * confirmed now also reports its tentative frames), so records carry their own frame.
    * @param {TrackRecord[]} records
    */
-  ingest(frame, records) {
-    for (const r of this.table.at(frame)) this.table.remove(r);
+  ingest(records) {
     for (const r of records) {
+      const frame = r.frame;
       if (!this.trackerIds.has(r.id)) {
         this.trackerIds.add(r.id);
         if (!this.aliases.has(r.id) && this.taken(r.id)) this.aliases.set(r.id, this.nextId++);
