@@ -11,11 +11,18 @@
 //! pixels straight into wasm memory through `new Uint8ClampedArray(memory.buffer, buf.ptr(),
 //! buf.len())`, and hands the buffer handle to the tracker or detector, which read it in place.
 
-use crate::frame::{BBox, Frame, Mask, Point};
+use crate::detect::{
+    BackgroundConfig, BackgroundSubtractor, Connectivity, Detector, ShadowConfig, UpdatePolicy,
+};
+use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Summary};
+use crate::frame::{BBox, Detection, Frame, FrameError, Mask, Point, TrackState, TrackedShape};
 use crate::io::{self, Record, RecordFlags, Rle};
+use crate::synth::{Scene, SynthConfig};
+use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
 use serde::{Deserialize, Serialize};
 use tsify::{Ts, Tsify};
 use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
 
 /// Installs the panic hook. Runs once, when the module is instantiated.
 #[wasm_bindgen(start)]
@@ -54,6 +61,38 @@ enum BindingError {
         /// Largest side accepted.
         max: u32,
     },
+    /// Frames must be tracked in order, each once.
+    #[error("frames must be tracked in order: expected frame {expected}, got {got}")]
+    FrameOrder {
+        /// The next frame.
+        expected: u32,
+        /// The frame given.
+        got: u32,
+    },
+    /// A tracker sees one video: its frame size cannot change.
+    #[error("frame size changed from {expected:?} to {got:?}: start a new tracker")]
+    SizeChanged {
+        /// Size of the first frame.
+        expected: (u32, u32),
+        /// Size of this frame.
+        got: (u32, u32),
+    },
+    /// A frame number outside the sequence.
+    #[error("frame {frame} is outside 1..={frames}")]
+    FrameRange {
+        /// The frame asked for.
+        frame: u32,
+        /// Frames in the sequence.
+        frames: u32,
+    },
+    /// An option has a value the bindings do not accept.
+    #[error("option {name}: {message}")]
+    Option {
+        /// The option.
+        name: &'static str,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// Reads a typed JS argument into its Rust struct; a shape mismatch becomes a JS `Error`.
@@ -66,6 +105,20 @@ where
     T::JsType: Clone,
 {
     v.to_rust().map_err(js_error)
+}
+
+/// Reads a settings object strictly: an unknown field is an error naming it.
+///
+/// serde-wasm-bindgen reads only the fields a struct declares, so `deny_unknown_fields` never
+/// fires through it and a typo (`max_lots`) would silently keep the default. Settings are
+/// small, so they go through a JSON value, which sees every key.
+fn settings<T>(v: Ts<T>) -> Result<T, JsValue>
+where
+    T: Tsify + serde::de::DeserializeOwned,
+    T::JsType: JsCast,
+{
+    let json: serde_json::Value = serde_wasm_bindgen::from_value(v.js_value()).map_err(js_error)?;
+    serde_json::from_value(json).map_err(js_error)
 }
 
 /// Converts an output struct to its typed JS value.
@@ -372,7 +425,97 @@ impl From<&Mask> for MaskBitmap {
 /// Decodes a compressed RLE into a bitmap cropped to its foreground, for drawing overlays.
 #[wasm_bindgen(js_name = decodeMask)]
 pub fn decode_mask(rle: Ts<RleJs>) -> Result<Ts<MaskBitmap>, JsValue> {
-    ts(&MaskBitmap::from(&rust(rle)?.to_rle()?.to_mask()))
+    let rle = rust(rle)?.to_rle()?;
+    ts(&MaskBitmap::from(&cropped_mask(&rle).map_err(js_error)?))
+}
+
+/// `Rle::to_mask` without the full-image bitmap: the page decodes every shape of every frame
+/// it draws, and a 1280×720 scratch image per shape costs more than the drawing. Equal output
+/// (checked by the wasm tests), O(runs + mask area).
+pub fn cropped_mask(rle: &Rle) -> Result<Mask, FrameError> {
+    let h = rle.height as u64;
+    if h == 0 || rle.width == 0 {
+        return Ok(Mask::empty());
+    }
+    let total = h * rle.width as u64;
+    // Pass 1: the foreground's bounding rectangle, from the runs alone.
+    let (mut x0, mut y0, mut x1, mut y1) = (u64::MAX, u64::MAX, 0u64, 0u64);
+    let mut pos = 0u64;
+    for (i, &c) in rle.counts.iter().enumerate() {
+        let end = (pos + c as u64).min(total);
+        if i % 2 == 1 && end > pos {
+            let (xa, xb) = (pos / h, (end - 1) / h);
+            x0 = x0.min(xa);
+            x1 = x1.max(xb);
+            // A run spanning several columns covers whole columns in between.
+            if xb > xa {
+                y0 = 0;
+                y1 = h - 1;
+            } else {
+                y0 = y0.min(pos % h);
+                y1 = y1.max((end - 1) % h);
+            }
+        }
+        pos = end;
+    }
+    if x0 == u64::MAX {
+        return Ok(Mask::empty());
+    }
+    let (w, hh) = (x1 - x0 + 1, y1 - y0 + 1);
+    let mut data = vec![0u8; (w * hh) as usize];
+    // Pass 2: fill the runs, column by column.
+    let mut pos = 0u64;
+    for (i, &c) in rle.counts.iter().enumerate() {
+        let end = (pos + c as u64).min(total);
+        if i % 2 == 1 {
+            for p in pos..end {
+                let (x, y) = (p / h - x0, p % h - y0);
+                data[(y * w + x) as usize] = 1;
+            }
+        }
+        pos = end;
+    }
+    Mask::new(x0 as i32, y0 as i32, w as u32, hh as u32, data)
+}
+
+/// `Rle::from_mask` walking only the mask's columns and rows (whole background columns are one
+/// step): O(image width + mask area) instead of O(image area). The tracker reports every
+/// shape of every frame as RLE, so this is on the per-frame path. Equal output (wasm tests).
+pub fn rle_of_mask(mask: &Mask, width: u32, height: u32) -> Rle {
+    let (w, h) = (width as i64, height as i64);
+    let mut counts = Vec::new();
+    let (mut prev, mut run) = (false, 0u32);
+    let (mx0, my0) = (mask.x() as i64, mask.y() as i64);
+    let (mx1, my1) = (mx0 + mask.width() as i64, my0 + mask.height() as i64);
+    let (ya, yb) = (my0.clamp(0, h), my1.clamp(0, h));
+    let mut push = |v: bool, n: u32, prev: &mut bool, run: &mut u32| {
+        if n == 0 {
+            return;
+        }
+        if v != *prev {
+            counts.push(*run);
+            *run = 0;
+            *prev = v;
+        }
+        *run += n;
+    };
+    for x in 0..w {
+        if x < mx0 || x >= mx1 || ya >= yb {
+            push(false, height, &mut prev, &mut run);
+            continue;
+        }
+        push(false, ya as u32, &mut prev, &mut run);
+        for y in ya..yb {
+            push(mask.get(x as i32, y as i32), 1, &mut prev, &mut run);
+        }
+        push(false, (h - yb) as u32, &mut prev, &mut run);
+    }
+    counts.push(run);
+    Rle {
+        height,
+        width,
+        counts,
+    }
 }
 
 /// Encodes a full-image bitmap (`width·height` bytes, non-zero = foreground) as compressed RLE.
@@ -386,4 +529,914 @@ pub fn encode_mask(width: u32, height: u32, bitmap: &[u8]) -> Result<Ts<RleJs>, 
 #[wasm_bindgen]
 pub fn version() -> String {
     env!("CARGO_PKG_VERSION").to_string()
+}
+
+// ------------------------------------------------------------------------------------------
+// Detections
+
+/// A mask handed in by a JS detector: `data` holds `width·height` bytes (non-zero = object)
+/// for the rectangle whose top-left pixel is `(x, y)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+pub struct MaskInput {
+    /// Image x of the left column.
+    pub x: i32,
+    /// Image y of the top row.
+    pub y: i32,
+    /// Bitmap width.
+    pub width: u32,
+    /// Bitmap height.
+    pub height: u32,
+    /// Row-major bytes.
+    #[serde(with = "serde_bytes")]
+    #[tsify(type = "Uint8Array")]
+    pub data: Vec<u8>,
+    /// Detector confidence; defaults to 1.
+    #[serde(default = "one")]
+    #[tsify(optional)]
+    pub score: f64,
+    /// Class label; -1 (the default) when unknown.
+    #[serde(default = "minus_one_i32")]
+    #[tsify(optional)]
+    pub class: i32,
+}
+
+/// A box handed in by a JS detector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+pub struct BoxInput {
+    /// The box.
+    pub bbox: BoxJs,
+    /// Detector confidence; defaults to 1.
+    #[serde(default = "one")]
+    #[tsify(optional)]
+    pub score: f64,
+    /// Class label; -1 (the default) when unknown.
+    #[serde(default = "minus_one_i32")]
+    #[tsify(optional)]
+    pub class: i32,
+}
+
+/// What a detector written in JS returns: masks, boxes, or both.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+pub struct DetectionLists {
+    /// Mask detections.
+    #[serde(default)]
+    #[tsify(optional)]
+    pub masks: Vec<MaskInput>,
+    /// Box-only detections.
+    #[serde(default)]
+    #[tsify(optional)]
+    pub boxes: Vec<BoxInput>,
+}
+
+/// One detection as JS sees it (for drawing detector output).
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct DetectionJs {
+    /// Bounding box.
+    pub bbox: BoxJs,
+    /// Cropped mask, when the detector gave one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub mask: Option<MaskBitmap>,
+    /// Confidence.
+    pub score: f64,
+    /// Class label (-1 when unknown).
+    pub class: i32,
+}
+
+impl From<&Detection> for DetectionJs {
+    fn from(d: &Detection) -> Self {
+        DetectionJs {
+            bbox: d.bbox.into(),
+            mask: d.mask.as_ref().map(MaskBitmap::from),
+            score: d.score,
+            class: d.class,
+        }
+    }
+}
+
+/// A list of detections as JS sees it.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+#[serde(transparent)]
+pub struct DetectionList(pub Vec<DetectionJs>);
+
+/// One frame's detections, kept in wasm memory: the background detector's output goes to the
+/// tracker without crossing into JS. Detectors written in JS build one with `fromLists`.
+#[wasm_bindgen]
+pub struct Detections {
+    inner: Vec<Detection>,
+}
+
+#[wasm_bindgen]
+impl Detections {
+    /// Detections from a JS detector's masks and boxes (checked: sizes, finite boxes).
+    #[wasm_bindgen(js_name = fromLists)]
+    pub fn from_lists(lists: Ts<DetectionLists>) -> Result<Detections, JsValue> {
+        let lists = rust(lists)?;
+        let mut inner = Vec::with_capacity(lists.masks.len() + lists.boxes.len());
+        for m in lists.masks {
+            let mask = Mask::new(m.x, m.y, m.width, m.height, m.data).map_err(js_error)?;
+            let mut d = Detection::from_mask(mask, m.score);
+            d.class = m.class;
+            inner.push(d);
+        }
+        for b in lists.boxes {
+            let bbox = BBox::checked(b.bbox.x, b.bbox.y, b.bbox.w, b.bbox.h).map_err(js_error)?;
+            let mut d = Detection::from_box(bbox, b.score);
+            d.class = b.class;
+            inner.push(d);
+        }
+        Ok(Detections { inner })
+    }
+
+    /// Number of detections.
+    #[wasm_bindgen(getter)]
+    pub fn len(&self) -> usize {
+        self.inner.len()
+    }
+
+    /// Whether there is no detection.
+    #[wasm_bindgen(getter, js_name = isEmpty)]
+    pub fn is_empty(&self) -> bool {
+        self.inner.is_empty()
+    }
+
+    /// The detections as plain JS objects (copies the masks).
+    #[wasm_bindgen(js_name = toList)]
+    pub fn to_list(&self) -> Result<Ts<DetectionList>, JsValue> {
+        ts(&DetectionList(
+            self.inner.iter().map(DetectionJs::from).collect(),
+        ))
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Background detector
+
+/// The adaptive background subtractor (thesis eq. 1–2) with morphology and connected
+/// components: one mask per moving object, no model weights.
+#[wasm_bindgen]
+pub struct BackgroundDetector {
+    inner: BackgroundSubtractor,
+}
+
+#[wasm_bindgen]
+impl BackgroundDetector {
+    /// A detector with the core's defaults, or the settings given (`BackgroundConfig`'s
+    /// fields; missing ones keep their defaults).
+    #[wasm_bindgen(constructor)]
+    pub fn new(config: Option<Ts<BackgroundOptions>>) -> Result<BackgroundDetector, JsValue> {
+        let cfg = match config {
+            Some(c) => settings(c)?.into_core()?,
+            None => BackgroundConfig::default(),
+        };
+        Ok(BackgroundDetector {
+            inner: BackgroundSubtractor::new(cfg).map_err(js_error)?,
+        })
+    }
+
+    /// Detects the moving objects of the frame in `buf` (frames must come in order).
+    pub fn detect(&mut self, buf: &FrameBuffer) -> Result<Detections, JsValue> {
+        let frame = buf.frame()?;
+        let inner = self.inner.detect(&frame).map_err(js_error)?;
+        Ok(Detections { inner })
+    }
+
+    /// Forgets the background model (e.g. after a cut or a size change).
+    pub fn reset(&mut self) {
+        self.inner.reset();
+    }
+}
+
+/// Settings of the background detector; every field is optional and defaults to the core's
+/// `BackgroundConfig::default()`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct BackgroundOptions {
+    /// Frames averaged into the initial background.
+    #[tsify(optional)]
+    pub init_frames: Option<u32>,
+    /// Learning rate of background pixels, in (0, 1].
+    #[tsify(optional)]
+    pub alpha: Option<f32>,
+    /// Learning rate of foreground pixels (selective update); 0 = only by absorption.
+    #[tsify(optional)]
+    pub foreground_alpha: Option<f32>,
+    /// Learn every pixel at `alpha` (the thesis' eq. 2 as written) instead of selectively.
+    #[tsify(optional)]
+    pub update_all: Option<bool>,
+    /// Grey-level difference above which a pixel is foreground.
+    #[tsify(optional)]
+    pub threshold: Option<f32>,
+    /// Frames after which a still foreground pixel is absorbed into the background (0 = never).
+    #[tsify(optional)]
+    pub absorb_frames: Option<u32>,
+    /// Suppress cast shadows (with the core's default shadow settings).
+    #[tsify(optional)]
+    pub shadows: Option<bool>,
+    /// Radius of the opening (0 = none).
+    #[tsify(optional)]
+    pub open_radius: Option<u32>,
+    /// Radius of the closing (0 = none).
+    #[tsify(optional)]
+    pub close_radius: Option<u32>,
+    /// Blobs with fewer pixels are dropped.
+    #[tsify(optional)]
+    pub min_area: Option<u32>,
+    /// Pixel connectivity of blobs: 4 or 8.
+    #[tsify(optional, type = "4 | 8")]
+    pub connectivity: Option<u8>,
+}
+
+impl BackgroundOptions {
+    fn into_core(self) -> Result<BackgroundConfig, JsValue> {
+        let mut c = BackgroundConfig::default();
+        if let Some(v) = self.init_frames {
+            c.init_frames = v;
+        }
+        if let Some(v) = self.alpha {
+            c.alpha = v;
+        }
+        match (self.update_all, self.foreground_alpha) {
+            (Some(true), _) => c.update = UpdatePolicy::All,
+            (_, Some(foreground_alpha)) => c.update = UpdatePolicy::Selective { foreground_alpha },
+            _ => {}
+        }
+        if let Some(v) = self.threshold {
+            c.threshold = v;
+        }
+        if let Some(v) = self.absorb_frames {
+            c.absorb_frames = v;
+        }
+        if let Some(v) = self.shadows {
+            c.shadow = v.then(ShadowConfig::default);
+        }
+        if let Some(v) = self.open_radius {
+            c.open_radius = v;
+        }
+        if let Some(v) = self.close_radius {
+            c.close_radius = v;
+        }
+        if let Some(v) = self.min_area {
+            c.min_area = u64::from(v);
+        }
+        match self.connectivity {
+            None => {}
+            Some(4) => c.connectivity = Connectivity::Four,
+            Some(8) => c.connectivity = Connectivity::Eight,
+            Some(n) => {
+                return Err(js_error(BindingError::Option {
+                    name: "connectivity",
+                    message: format!("{n} (expected 4 or 8)"),
+                }))
+            }
+        }
+        // The core checks ranges when the detector is built.
+        Ok(c)
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Tracker
+
+/// Reads a field that may be absent (keep the default), `null` (no value) or a number.
+fn double_option<'de, D>(d: D) -> Result<Option<Option<f64>>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    Option::<f64>::deserialize(d).map(Some)
+}
+
+/// Weight, gate and scale of one pair-cost term; absent fields keep their defaults.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct TermOptions {
+    /// Weight in the combined cost; 0 disables the term.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub weight: Option<f64>,
+    /// Highest cost of this term a match may have; `null`: no gate.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub gate: Option<Option<f64>>,
+    /// Term-specific scale.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub scale: Option<f64>,
+}
+
+/// The pair-cost terms (see the core's `track::Terms` for what each measures).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct TermsOptions {
+    /// Box IoU with the predicted box.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub iou: Option<TermOptions>,
+    /// Generalised IoU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub giou: Option<TermOptions>,
+    /// Centre distance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub centre: Option<TermOptions>,
+    /// Size ratio.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub size: Option<TermOptions>,
+    /// Mahalanobis distance under the Kalman filter.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub mahalanobis: Option<TermOptions>,
+    /// Mask IoU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub mask_iou: Option<TermOptions>,
+    /// Shape context (thesis ch. 4.3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub shape_context: Option<TermOptions>,
+    /// Spatial colour (thesis ch. 4.4).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub colour: Option<TermOptions>,
+    /// SIFT matches.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub sift: Option<TermOptions>,
+}
+
+/// Noise of the constant-velocity box Kalman filter, as fractions of the box size.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct MotionOptions {
+    /// Position process noise per frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub std_position: Option<f64>,
+    /// Velocity process noise per frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub std_velocity: Option<f64>,
+    /// Measurement noise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub std_measurement: Option<f64>,
+}
+
+/// The tracker's settings (the core's `track::Config`, every field optional: absent fields keep
+/// the core's documented defaults). A test checks this mirrors the core's fields exactly.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrackerConfig {
+    /// Detections scoring below this are ignored.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub min_score: Option<f64>,
+    /// Detections at or above this score are matched first and may start tracks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub high_score: Option<f64>,
+    /// Score an unmatched detection needs to start a track.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub new_track_score: Option<f64>,
+    /// Matches a tentative track needs to be confirmed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub min_hits: Option<u32>,
+    /// Frames a tentative track may go unmatched.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_tentative_misses: Option<u32>,
+    /// Frames a confirmed track stays lost (and re-identifiable) before removal.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_lost: Option<u32>,
+    /// Report a confirmed track's tentative frames too.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub report_tentative: Option<bool>,
+    /// Growth of a track's predicted box before region estimation, as a fraction of its size.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub region_margin: Option<f64>,
+    /// Extra growth per frame unmatched.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub region_margin_per_miss: Option<f64>,
+    /// Highest cost accepted for a high detection.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_cost: Option<f64>,
+    /// Highest cost accepted for a low detection.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_cost_low: Option<f64>,
+    /// Highest cost accepted for a tentative track.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_cost_tentative: Option<f64>,
+    /// Cost of leaving a track or detection unmatched; `null`: maximise matches first.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub unmatched_cost: Option<Option<f64>>,
+    /// Per-frame decay of a lost track's velocity.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub lost_velocity_decay: Option<f64>,
+    /// Match lost tracks after the tracks seen in the previous frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub lost_second: Option<bool>,
+    /// Terms of the main association.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub terms: Option<TermsOptions>,
+    /// Terms of the re-identification stage.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub reid_terms: Option<TermsOptions>,
+    /// Highest re-identification cost accepted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub reid_max_cost: Option<f64>,
+    /// Kalman filter noise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub motion: Option<MotionOptions>,
+}
+
+impl TrackerConfig {
+    /// The core config: the given fields over the defaults (the core config and its parts all
+    /// take defaults for absent fields, so a JSON round trip does the overlay).
+    pub fn to_core(&self) -> Result<TrackConfig, JsValue> {
+        let v = serde_json::to_value(self).map_err(js_error)?;
+        serde_json::from_value(v).map_err(js_error)
+    }
+}
+
+/// One tracked shape as the tracker reports it: a record plus the tracker's own fields.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct ShapeJs {
+    /// 1-based frame number.
+    pub frame: u32,
+    /// Track id (unique within this tracker, from 1).
+    pub id: i64,
+    /// Bounding box.
+    pub bbox: BoxJs,
+    /// Detection score.
+    pub score: f64,
+    /// Class label (-1 when unknown).
+    pub class: i32,
+    /// Mask as compressed RLE over the frame, when the detection had one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub mask: Option<RleJs>,
+    /// Filled in by the offline pass rather than detected.
+    pub interpolated: bool,
+    /// Lifecycle state.
+    #[tsify(type = "\"tentative\" | \"confirmed\" | \"lost\" | \"removed\"")]
+    pub state: TrackState,
+    /// Centroid (mask moments or box centre).
+    pub centroid: PointJs,
+    /// Matching cost that attached the detection (0 for a new track).
+    pub cost: f64,
+}
+
+impl ShapeJs {
+    fn new(s: &TrackedShape, rle: Option<&Rle>) -> Self {
+        ShapeJs {
+            frame: s.frame,
+            id: s.id as i64,
+            bbox: s.bbox.into(),
+            score: s.score,
+            class: s.class,
+            mask: rle.map(RleJs::from),
+            interpolated: s.interpolated,
+            state: s.state,
+            centroid: s.centroid.into(),
+            cost: s.cost,
+        }
+    }
+}
+
+/// The shapes one update reports.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+#[serde(transparent)]
+pub struct Shapes(pub Vec<ShapeJs>);
+
+/// The online tracker. Owns its ids (two trackers on a page never share a counter) and keeps
+/// every reported shape, so the whole result can be read back or exported at any time.
+#[wasm_bindgen]
+pub struct Tracker {
+    inner: CoreTracker,
+    /// Everything reported so far, as records (masks as RLE over the frame).
+    history: Vec<Record>,
+    /// Frame size, known from the first frame (masks need it for RLE).
+    size: Option<(u32, u32)>,
+}
+
+#[wasm_bindgen]
+impl Tracker {
+    /// A tracker with the core's defaults, or with the given settings over them.
+    #[wasm_bindgen(constructor)]
+    pub fn new(config: Option<Ts<TrackerConfig>>) -> Result<Tracker, JsValue> {
+        let cfg = match config {
+            Some(c) => settings(c)?.to_core()?,
+            None => TrackConfig::default(),
+        };
+        Ok(Tracker {
+            inner: CoreTracker::new(cfg).map_err(js_error)?,
+            history: Vec::new(),
+            size: None,
+        })
+    }
+
+    /// Number of frames tracked so far.
+    #[wasm_bindgen(getter)]
+    pub fn frame(&self) -> u32 {
+        self.inner.frame()
+    }
+
+    /// Tracks frame `frame` (1-based; must be the next one) with its pixels and detections.
+    pub fn update(
+        &mut self,
+        frame: u32,
+        buf: &FrameBuffer,
+        detections: &Detections,
+    ) -> Result<Ts<Shapes>, JsValue> {
+        self.check_next(frame)?;
+        self.check_size(buf.width, buf.height)?;
+        let image = buf.frame()?;
+        let shapes = self
+            .inner
+            .update(Some(&image), &detections.inner)
+            .map_err(js_error)?;
+        self.report(&shapes)
+    }
+
+    /// Tracks frame `frame` from detections only (box mode: no pixels, e.g. a `det.txt`).
+    #[wasm_bindgen(js_name = updateDetections)]
+    pub fn update_detections(
+        &mut self,
+        frame: u32,
+        detections: &Detections,
+    ) -> Result<Ts<Shapes>, JsValue> {
+        self.check_next(frame)?;
+        let shapes = self
+            .inner
+            .update(None, &detections.inner)
+            .map_err(js_error)?;
+        self.report(&shapes)
+    }
+
+    /// Every shape reported so far, as records (by frame, then id).
+    pub fn tracks(&self) -> Result<Ts<Records>, JsValue> {
+        let mut recs = self.history.clone();
+        recs.sort_by_key(|r| (r.frame, r.id));
+        ts(&from_core_records(&recs))
+    }
+}
+
+impl Tracker {
+    fn check_next(&self, frame: u32) -> Result<(), JsValue> {
+        let expected = self.inner.frame() + 1;
+        if frame != expected {
+            return Err(js_error(BindingError::FrameOrder {
+                expected,
+                got: frame,
+            }));
+        }
+        Ok(())
+    }
+
+    fn check_size(&mut self, width: u32, height: u32) -> Result<(), JsValue> {
+        match self.size {
+            None => self.size = Some((width, height)),
+            Some((w, h)) if (w, h) != (width, height) => {
+                return Err(js_error(BindingError::SizeChanged {
+                    expected: (w, h),
+                    got: (width, height),
+                }))
+            }
+            Some(_) => {}
+        }
+        Ok(())
+    }
+
+    fn report(&mut self, shapes: &[TrackedShape]) -> Result<Ts<Shapes>, JsValue> {
+        let (w, h) = self.size.unwrap_or((0, 0));
+        let mut out = Vec::with_capacity(shapes.len());
+        for s in shapes {
+            let rle = s.mask.as_ref().map(|m| rle_of_mask(m, w, h));
+            out.push(ShapeJs::new(s, rle.as_ref()));
+            let mut r = Record::from_tracked(s, None);
+            r.mask = rle;
+            self.history.push(r);
+        }
+        ts(&Shapes(out))
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Synthetic scene (the embedded demo)
+
+/// The synthetic scenes the app offers, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Tsify)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScenePreset {
+    /// 1280×720, 600 frames, 12 shapes entering and leaving, two occluding bars.
+    Demo,
+    /// The core's default scene: 640×480, 300 frames, 10 shapes.
+    Default,
+    /// Crossings and occlusions: 8 shapes bouncing behind two bars, 640×480.
+    Occlusion,
+}
+
+/// Frames between two saved scene states: stepping back replays at most this many frames.
+const CHECKPOINT_EVERY: u32 = 100;
+
+/// A deterministic synthetic sequence with ground truth, rendered in wasm straight into a
+/// [`FrameBuffer`]: the demo needs nothing downloaded.
+#[wasm_bindgen]
+pub struct SynthScene {
+    /// Positioned at the next frame to render in order.
+    scene: Scene,
+    /// Scene states before frames 1, 1+N, 1+2N, ... for random access (display scrubbing).
+    checkpoints: Vec<Scene>,
+}
+
+#[wasm_bindgen]
+impl SynthScene {
+    /// The named scene.
+    #[wasm_bindgen(constructor)]
+    pub fn new(preset: Ts<ScenePreset>) -> Result<SynthScene, JsValue> {
+        let cfg = match rust(preset)? {
+            ScenePreset::Demo => SynthConfig::demo(),
+            ScenePreset::Default => SynthConfig::default(),
+            ScenePreset::Occlusion => SynthConfig::occlusion_scene(0),
+        };
+        let scene = Scene::new(cfg).map_err(js_error)?;
+        Ok(SynthScene {
+            checkpoints: vec![scene.clone()],
+            scene,
+        })
+    }
+
+    /// Frame width.
+    #[wasm_bindgen(getter)]
+    pub fn width(&self) -> u32 {
+        self.scene.config().width
+    }
+
+    /// Frame height.
+    #[wasm_bindgen(getter)]
+    pub fn height(&self) -> u32 {
+        self.scene.config().height
+    }
+
+    /// Number of frames.
+    #[wasm_bindgen(getter)]
+    pub fn frames(&self) -> u32 {
+        self.scene.config().frames
+    }
+
+    /// Frame rate.
+    #[wasm_bindgen(getter)]
+    pub fn fps(&self) -> f64 {
+        self.scene.config().fps
+    }
+
+    /// Renders frame `n` (1-based) as RGBA into `buf`, with its ground truth and the scene's
+    /// own (noisy) detections. In-order frames cost one render; others replay from the nearest
+    /// saved state.
+    pub fn render(&mut self, n: u32, buf: &mut FrameBuffer) -> Result<SceneFrame, JsValue> {
+        let (w, h, frames) = (self.width(), self.height(), self.frames());
+        if n < 1 || n > frames {
+            return Err(js_error(BindingError::FrameRange { frame: n, frames }));
+        }
+        if (buf.width, buf.height) != (w, h) {
+            return Err(js_error(BindingError::SizeChanged {
+                expected: (w, h),
+                got: (buf.width, buf.height),
+            }));
+        }
+        if self.scene.next_index() != n {
+            let k = ((n - 1) / CHECKPOINT_EVERY) as usize;
+            // Checkpoints exist for every block already reached in order; beyond, start from
+            // the last one.
+            let cp = k.min(self.checkpoints.len().saturating_sub(1));
+            if let Some(s) = self.checkpoints.get(cp) {
+                if self.scene.next_index() > n || s.next_index() > self.scene.next_index() {
+                    self.scene = s.clone();
+                }
+            }
+        }
+        let mut frame = None;
+        while self.scene.next_index() <= n {
+            let next = self.scene.next_index();
+            if (next - 1) % CHECKPOINT_EVERY == 0 {
+                let k = ((next - 1) / CHECKPOINT_EVERY) as usize;
+                if k == self.checkpoints.len() {
+                    self.checkpoints.push(self.scene.clone());
+                }
+            }
+            frame = self.scene.frame();
+            if frame.is_none() {
+                break;
+            }
+        }
+        let Some(f) = frame.filter(|f| f.index == n) else {
+            return Err(js_error(BindingError::FrameRange { frame: n, frames }));
+        };
+        for (dst, src) in buf.data.chunks_exact_mut(4).zip(f.image.chunks_exact(3)) {
+            dst[..3].copy_from_slice(src);
+            dst[3] = 255;
+        }
+        Ok(SceneFrame {
+            index: f.index,
+            gt: f.gt_records(),
+            detections: f.detections,
+        })
+    }
+}
+
+/// One rendered synthetic frame's ground truth and detections (the pixels are in the buffer).
+#[wasm_bindgen]
+pub struct SceneFrame {
+    index: u32,
+    gt: Vec<Record>,
+    detections: Vec<Detection>,
+}
+
+#[wasm_bindgen]
+impl SceneFrame {
+    /// Frame number (1-based).
+    #[wasm_bindgen(getter)]
+    pub fn index(&self) -> u32 {
+        self.index
+    }
+
+    /// Ground truth of the visible objects, as records with masks.
+    #[wasm_bindgen(js_name = groundTruth)]
+    pub fn ground_truth(&self) -> Result<Ts<Records>, JsValue> {
+        ts(&from_core_records(&self.gt))
+    }
+
+    /// The scene's own noisy mask detections (misses, jitter, false positives).
+    pub fn detections(&self) -> Detections {
+        Detections {
+            inner: self.detections.clone(),
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Evaluation
+
+/// How to score: which similarity, threshold and preprocessing (defaults: box IoU, 0.5, none).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct EvalOptions {
+    /// Pair similarity: box IoU or mask IoU.
+    #[tsify(optional, type = "\"box\" | \"mask\"")]
+    pub similarity: Option<String>,
+    /// Similarity a CLEAR or Identity match needs.
+    #[tsify(optional)]
+    pub threshold: Option<f64>,
+    /// TrackEval's preprocessing of a benchmark: "mot15", "mot17", "mot20", "mots"; absent:
+    /// score every record as given.
+    #[tsify(optional, type = "\"mot15\" | \"mot17\" | \"mot20\" | \"mots\"")]
+    pub benchmark: Option<String>,
+}
+
+impl EvalOptions {
+    fn to_core(&self) -> Result<EvalConfig, JsValue> {
+        let masks = match self.similarity.as_deref() {
+            None | Some("box") => false,
+            Some("mask") => true,
+            Some(other) => {
+                return Err(js_error(BindingError::Option {
+                    name: "similarity",
+                    message: format!("{other:?} (expected \"box\" or \"mask\")"),
+                }))
+            }
+        };
+        let mut cfg = match self.benchmark.as_deref() {
+            None => EvalConfig {
+                preprocessing: Preprocessing::None,
+                ..EvalConfig::default()
+            },
+            Some(b @ ("mot15" | "mot17" | "mot20" | "mots")) => EvalConfig::for_benchmark(b, masks),
+            Some(other) => {
+                return Err(js_error(BindingError::Option {
+                    name: "benchmark",
+                    message: format!("{other:?} (expected mot15, mot17, mot20 or mots)"),
+                }))
+            }
+        };
+        cfg.similarity = if masks {
+            Similarity::MaskIou
+        } else {
+            Similarity::BoxIou
+        };
+        if let Some(t) = self.threshold {
+            cfg.threshold = t;
+        }
+        Ok(cfg)
+    }
+}
+
+/// The headline MOT metrics, as TrackEval prints them (percentages 0–100, counts).
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct Scores {
+    /// HOTA.
+    pub hota: f64,
+    /// Detection accuracy (HOTA's).
+    pub deta: f64,
+    /// Association accuracy (HOTA's).
+    pub assa: f64,
+    /// Localisation accuracy (HOTA's).
+    pub loca: f64,
+    /// MOTA.
+    pub mota: f64,
+    /// MOTP.
+    pub motp: f64,
+    /// IDF1.
+    pub idf1: f64,
+    /// Identity precision.
+    pub idp: f64,
+    /// Identity recall.
+    pub idr: f64,
+    /// Identity switches.
+    pub idsw: u64,
+    /// False positives.
+    pub fp: u64,
+    /// False negatives (misses).
+    #[serde(rename = "fn")]
+    pub fn_: u64,
+    /// Fragmentations.
+    pub frag: u64,
+    /// Mostly tracked ground-truth tracks.
+    pub mt: u64,
+    /// Partly tracked.
+    pub pt: u64,
+    /// Mostly lost.
+    pub ml: u64,
+    /// Ground-truth tracks.
+    pub gt_ids: u64,
+    /// Tracker tracks.
+    pub ids: u64,
+}
+
+impl From<&Summary> for Scores {
+    fn from(s: &Summary) -> Self {
+        Scores {
+            hota: s.hota,
+            deta: s.det_a,
+            assa: s.ass_a,
+            loca: s.loc_a,
+            mota: s.mota,
+            motp: s.motp,
+            idf1: s.idf1,
+            idp: s.idp,
+            idr: s.idr,
+            idsw: s.idsw,
+            fp: s.fp,
+            fn_: s.fn_,
+            frag: s.frag,
+            mt: s.mt,
+            pt: s.pt,
+            ml: s.ml,
+            gt_ids: s.gt_ids,
+            ids: s.ids,
+        }
+    }
+}
+
+/// Scores `results` against `gt` over frames `1..=frames` with the core's evaluator (the same
+/// numbers as TrackEval).
+#[wasm_bindgen]
+pub fn evaluate(
+    gt: Ts<Records>,
+    results: Ts<Records>,
+    frames: u32,
+    options: Option<Ts<EvalOptions>>,
+) -> Result<Ts<Scores>, JsValue> {
+    let cfg = match options {
+        Some(o) => settings(o)?.to_core()?,
+        None => EvalOptions::default().to_core()?,
+    };
+    let gt = to_core_records(rust(gt)?)?;
+    let res = to_core_records(rust(results)?)?;
+    let input = [SequenceInput::new("sequence", frames, gt, res)];
+    let r = eval::evaluate(&input, &cfg).map_err(js_error)?;
+    ts(&Scores::from(&r.summary().combined))
 }

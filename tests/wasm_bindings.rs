@@ -169,3 +169,277 @@ fn mots_text_round_trips_byte_exact() {
     let text = write_records(ts(JsValue::from_str("mots")), ts(JsValue::from(recs))).unwrap();
     assert_eq!(text, line);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Tracker, detectors, synthetic scene, evaluation
+
+use shapetrack::io::Rle;
+use shapetrack::Mask;
+
+fn scene(preset: &str) -> SynthScene {
+    SynthScene::new(ts(JsValue::from_str(preset))).unwrap()
+}
+
+#[wasm_bindgen_test]
+fn tracker_config_type_mirrors_the_core_config_exactly() {
+    // Every core field is known to the mirror (deny_unknown_fields), and every mirror field
+    // exists in the core (the re-serialised mirror equals the core's JSON).
+    let core = serde_json::to_value(shapetrack::track::Config::default()).unwrap();
+    let mirror: TrackerConfig = serde_json::from_value(core.clone()).unwrap();
+    assert_eq!(serde_json::to_value(&mirror).unwrap(), core);
+    assert_eq!(
+        mirror.to_core().unwrap(),
+        shapetrack::track::Config::default()
+    );
+}
+
+#[wasm_bindgen_test]
+fn partial_tracker_config_overrides_only_what_it_names() {
+    let partial = serde_json::json!({ "max_lost": 60, "terms": { "iou": { "weight": 0.25 } } });
+    let mirror: TrackerConfig = serde_json::from_value(partial).unwrap();
+    let cfg = mirror.to_core().unwrap();
+    let def = shapetrack::track::Config::default();
+    assert_eq!(cfg.max_lost, 60);
+    assert_eq!(cfg.terms.iou.weight, 0.25);
+    assert_eq!(
+        cfg.terms.iou.gate, def.terms.iou.gate,
+        "absent gate keeps its default"
+    );
+    assert_eq!(cfg.min_hits, def.min_hits);
+    // Through the JS entry point: a typo is an error, not silently ignored.
+    let msg = error_message(
+        Tracker::new(Some(ts(js(&serde_json::json!({ "max_lots": 3 })))))
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("max_lots"), "{msg}");
+    let msg = error_message(
+        Tracker::new(Some(ts(js(&serde_json::json!({ "min_hits": 0 })))))
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("min_hits"), "{msg}");
+}
+
+/// Deterministic pseudo-random masks, some partly or wholly outside the image.
+fn masks() -> Vec<Mask> {
+    let mut state = 12345u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 33) as u32
+    };
+    (0..200)
+        .map(|_| {
+            let (w, h) = (1 + next() % 30, 1 + next() % 30);
+            let (x, y) = (next() as i32 % 90 - 20, next() as i32 % 70 - 20);
+            let data = (0..w * h).map(|_| (next() % 3 == 0) as u8).collect();
+            Mask::new(x, y, w, h, data).unwrap()
+        })
+        .collect()
+}
+
+#[wasm_bindgen_test]
+fn fast_rle_encoding_equals_the_core_encoder() {
+    for m in masks() {
+        assert_eq!(rle_of_mask(&m, 64, 48), Rle::from_mask(&m, 64, 48));
+    }
+}
+
+#[wasm_bindgen_test]
+fn cropped_decoding_equals_the_core_decoder() {
+    for m in masks() {
+        let rle = Rle::from_mask(&m, 64, 48);
+        assert_eq!(cropped_mask(&rle).unwrap(), rle.to_mask());
+    }
+    // A run crossing columns covers whole columns in between.
+    let rle = Rle {
+        height: 4,
+        width: 3,
+        counts: vec![2, 7, 3],
+    };
+    assert_eq!(cropped_mask(&rle).unwrap(), rle.to_mask());
+}
+
+#[wasm_bindgen_test]
+fn synthetic_frames_are_the_same_in_order_and_out_of_order() {
+    let mut a = scene("default");
+    let mut b = scene("default");
+    let (w, h) = (a.width(), a.height());
+    let mut buf_a = FrameBuffer::new(w, h).unwrap();
+    let mut buf_b = FrameBuffer::new(w, h).unwrap();
+    let mut frames = Vec::new();
+    for n in 1..=8 {
+        a.render(n, &mut buf_a).unwrap();
+        frames.push(pixels(&buf_a));
+    }
+    // Jump ahead, then back: the scene replays to the frame asked for.
+    for n in [7, 3, 8, 1] {
+        let f = b.render(n, &mut buf_b).unwrap();
+        assert_eq!(f.index(), n);
+        assert!(
+            pixels(&buf_b) == frames[n as usize - 1],
+            "frame {n} differs"
+        );
+    }
+    let msg = error_message(b.render(0, &mut buf_b).err().unwrap());
+    assert!(msg.contains("outside 1..=300"), "{msg}");
+}
+
+/// The frame buffer's bytes, read through wasm memory as JS would.
+fn pixels(buf: &FrameBuffer) -> Vec<u8> {
+    let mem: js_sys::WebAssembly::Memory = wasm_bindgen::memory().dyn_into().unwrap();
+    // Copy on the JS side first: allocating the Vec may grow wasm memory, which detaches a
+    // view on it (the reason the app rebuilds its views before every use).
+    js_sys::Uint8Array::new_with_byte_offset_and_length(
+        &mem.buffer(),
+        buf.ptr() as u32,
+        buf.len() as u32,
+    )
+    .slice(0, buf.len() as u32)
+    .to_vec()
+}
+
+#[wasm_bindgen_test]
+fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut tracker = Tracker::new(None).unwrap();
+    // Track id per gt object over 40 frames, from the scene's own detections.
+    let mut seen: std::collections::BTreeMap<i64, std::collections::BTreeSet<i64>> =
+        Default::default();
+    for n in 1..=40 {
+        let f = s.render(n, &mut buf).unwrap();
+        let shapes: Vec<serde_json::Value> = serde_wasm_bindgen::from_value(JsValue::from(
+            tracker.update(n, &buf, &f.detections()).unwrap(),
+        ))
+        .unwrap();
+        let gt = records_of(f.ground_truth().unwrap());
+        for sh in shapes.iter().filter(|s| s["frame"] == n) {
+            let b = &sh["bbox"];
+            let (x, y) = (b["x"].as_f64().unwrap(), b["y"].as_f64().unwrap());
+            let (w, h) = (b["w"].as_f64().unwrap(), b["h"].as_f64().unwrap());
+            let tb = shapetrack::BBox::new(x, y, w, h);
+            if let Some(g) = gt.iter().find(|g| {
+                shapetrack::BBox::new(g.bbox.x, g.bbox.y, g.bbox.w, g.bbox.h).iou(&tb) > 0.7
+            }) {
+                seen.entry(g.id)
+                    .or_default()
+                    .insert(sh["id"].as_i64().unwrap());
+            }
+            assert!(sh["mask"]["counts"].is_string(), "masks come back as RLE");
+        }
+    }
+    assert_eq!(tracker.frame(), 40);
+    assert!(seen.len() >= 5, "most objects tracked: {seen:?}");
+    let stable = seen.values().filter(|ids| ids.len() == 1).count();
+    assert!(stable * 10 >= seen.len() * 8, "ids per object: {seen:?}");
+    // The whole history comes back as records.
+    let all = records_of(tracker.tracks().unwrap());
+    assert!(all.iter().all(|r| r.mask.is_some()));
+    // Frames go in order.
+    let f = s.render(42, &mut buf).unwrap();
+    let msg = error_message(tracker.update(42, &buf, &f.detections()).err().unwrap());
+    assert!(msg.contains("expected frame 41, got 42"), "{msg}");
+    // A frame of another size is refused.
+    let small = FrameBuffer::new(8, 8).unwrap();
+    let msg = error_message(tracker.update(41, &small, &f.detections()).err().unwrap());
+    assert!(msg.contains("frame size changed"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn detections_from_js_lists_are_checked() {
+    let ok = serde_json::json!({
+        "boxes": [{ "bbox": { "x": 1, "y": 2, "w": 3, "h": 4 }, "score": 0.5 }],
+    });
+    let d = Detections::from_lists(ts(js(&ok))).unwrap();
+    assert_eq!(d.len(), 1);
+    let bad = serde_json::json!({ "boxes": [{ "bbox": { "x": 1, "y": 2, "w": -3, "h": 4 } }] });
+    let msg = error_message(Detections::from_lists(ts(js(&bad))).err().unwrap());
+    assert!(msg.contains("negative size"), "{msg}");
+    // A mask is a Uint8Array whose length must match its size.
+    let lists = js_sys::Object::new();
+    let m = js_sys::Object::new();
+    for (k, v) in [("x", 2.0), ("y", 3.0), ("width", 2.0), ("height", 2.0)] {
+        js_sys::Reflect::set(&m, &k.into(), &v.into()).unwrap();
+    }
+    js_sys::Reflect::set(
+        &m,
+        &"data".into(),
+        &js_sys::Uint8Array::from(&[1u8, 1, 0][..]),
+    )
+    .unwrap();
+    js_sys::Reflect::set(&lists, &"masks".into(), &js_sys::Array::of1(&m)).unwrap();
+    let msg = error_message(Detections::from_lists(ts(lists.into())).err().unwrap());
+    assert!(msg.contains("expected 2x2"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn background_detector_finds_the_moving_shapes() {
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut bg = BackgroundDetector::new(None).unwrap();
+    let mut found = 0;
+    for n in 1..=40 {
+        s.render(n, &mut buf).unwrap();
+        found = bg.detect(&buf).unwrap().len();
+    }
+    assert!(found >= 3, "{found} detections after the model settled");
+    let opts = serde_json::json!({ "connectivity": 6 });
+    let msg = error_message(BackgroundDetector::new(Some(ts(js(&opts)))).err().unwrap());
+    assert!(msg.contains("connectivity"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn evaluation_scores_perfect_and_broken_results() {
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut gt = Vec::new();
+    for n in 1..=10 {
+        gt.extend(records_of(
+            s.render(n, &mut buf).unwrap().ground_truth().unwrap(),
+        ));
+    }
+    let scores = |res: &Vec<RecordJs>, opts: serde_json::Value| -> serde_json::Value {
+        let v = evaluate(ts(js(&gt)), ts(js(res)), 10, Some(ts(js(&opts)))).unwrap();
+        serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
+    };
+    let perfect = scores(&gt, serde_json::json!({}));
+    assert_eq!(perfect["hota"], 100.0);
+    assert_eq!(perfect["mota"], 100.0);
+    let masks = scores(&gt, serde_json::json!({ "similarity": "mask" }));
+    assert_eq!(masks["idf1"], 100.0);
+    // Swap two ids from frame 5 on: identity metrics drop, detection does not.
+    let ids: Vec<i64> = gt
+        .iter()
+        .filter(|r| r.frame == 5)
+        .map(|r| r.id)
+        .take(2)
+        .collect();
+    let swapped: Vec<RecordJs> = gt
+        .iter()
+        .cloned()
+        .map(|mut r| {
+            if r.frame >= 5 && ids.contains(&r.id) {
+                r.id = if r.id == ids[0] { ids[1] } else { ids[0] };
+            }
+            r
+        })
+        .collect();
+    let sw = scores(&swapped, serde_json::json!({}));
+    assert_eq!(sw["mota"].as_f64().unwrap() < 100.0, true);
+    assert_eq!(sw["idsw"], 2);
+    assert_eq!(sw["deta"], 100.0);
+    let msg = error_message(
+        evaluate(
+            ts(js(&gt)),
+            ts(js(&gt)),
+            10,
+            Some(ts(js(&serde_json::json!({ "similarity": "area" })))),
+        )
+        .err()
+        .unwrap(),
+    );
+    assert!(msg.contains("similarity"), "{msg}");
+}

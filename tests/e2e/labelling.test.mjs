@@ -98,11 +98,9 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   /** Clicks the centre of a record's box on the overlay canvas. */
   const clickOn = async (/** @type {any} */ r, /** @type {boolean} */ shift) => {
     const box = await page.locator('#overlay').boundingBox();
-    const size = await page.evaluate(() => {
-      // The frame canvas has the image's size (the overlay has the screen's).
-      const c = /** @type {HTMLCanvasElement} */ (document.getElementById('frame'));
-      return { w: c.width, h: c.height };
-    });
+    // Image size from the page state (the overlay canvas has the screen's resolution).
+    const [w, h] = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().size);
+    const size = { w, h };
     assert.ok(box);
     const x = box.x + ((r.bbox.x + r.bbox.w / 2) / size.w) * box.width;
     const y = box.y + ((r.bbox.y + r.bbox.h / 2) / size.h) * box.height;

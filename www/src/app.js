@@ -18,7 +18,7 @@ import { FORMATS, guessFormat, exportName, formatInfo } from './io/formats.js';
  * @typedef {import('./lib/core.js').Core} Core
  * @typedef {import('./model/tracks.js').TrackRecord} TrackRecord
  * @typedef {import('./sources/sources.js').Source} Source
- * @typedef {import('./worker/protocol.js').StepResult} StepResult
+ * @typedef {import('./worker/protocol.js').StepResult & { painted: boolean }} StepResult
  * @typedef {import('./io/formats.js').FormatId} FormatId
  * @typedef {{ kind: 'synth', name: string, width: number, height: number, frames: number, fps: number }} SynthSource
  * @typedef {Source | SynthSource} AnySource
@@ -71,6 +71,7 @@ export class App {
       core.decodeMask(rle),
     );
     this.stage.onResize = () => this.render();
+    this.attached = this.worker.attach(byId('frame', HTMLCanvasElement));
     this.timeline = new Timeline(byId('timeline', HTMLCanvasElement), ({ id, frame, add }) => {
       if (id !== null) this.select(id, add);
       void this.seek(frame);
@@ -250,20 +251,21 @@ export class App {
     let lastDraw = 0;
     const catchUp = this.cur > this.processed + 1;
     while (true) {
-      while (this.playing && inflight.length < 2 && n <= until) inflight.push(this.send(src, n++, display !== 'none'));
+      while (this.playing && inflight.length < 2 && n <= until) {
+        // Offline, paint a frame now and then so the labeller sees progress.
+        const now = performance.now();
+        const paint = display === 'every' ? !catchUp || n >= this.cur : display === 'throttled' && now - lastDraw > OFFLINE_DRAW_MS;
+        if (paint) lastDraw = now;
+        inflight.push(this.send(src, n++, paint));
+      }
       const p = inflight.shift();
       if (!p) break;
       const res = await p;
       this.accept(res);
-      const now = performance.now();
-      const draw = display === 'every' ? !catchUp || res.frame >= this.cur : now - lastDraw > OFFLINE_DRAW_MS;
-      if (draw && res.bitmap) {
-        lastDraw = now;
+      // The worker painted the frame if it was asked to; draw its overlay.
+      if (res.painted) {
         this.cur = res.frame;
-        this.stage.showFrame(res.bitmap);
         this.render();
-      } else {
-        res.bitmap?.close();
       }
       progress.value = res.frame;
       if (src.kind === 'webcam' && !this.playing) break;
@@ -292,7 +294,8 @@ export class App {
         if (!b) throw new Error(`frame ${n} is not available`);
         bitmap = b;
       }
-      return { result: this.worker.step(n, bitmap, display) };
+      const result = this.worker.step(n, bitmap, display).then((r) => ({ ...r, painted: display }));
+      return { result };
     });
     this.grabChain = posted.then(
       () => undefined,
@@ -341,26 +344,52 @@ export class App {
    * @param {number} n
    */
   async show(n) {
-    const src = this.source;
     this.cur = n;
-    if (src) {
-      /** @type {ImageBitmap | null} */
-      let bitmap = null;
-      if (src.kind === 'synth') bitmap = (await this.worker.render(n)).bitmap;
-      else {
-        const grabbed = this.grabChain.then(() => src.frameAt(n));
-        this.grabChain = grabbed.then(
-          () => undefined,
-          () => undefined,
-        );
-        bitmap = await grabbed;
-      }
-      // A later seek may have overtaken this one; draw only the frame still wanted.
-      if (this.cur !== n) bitmap?.close();
-      else if (bitmap) this.stage.showFrame(bitmap);
-      else this.stage.blank();
+    // Scrubbing fires faster than frames can be fetched: one fetch at a time, the newest
+    // wanted frame next (frames skipped in between are never fetched).
+    if (this.showing) {
+      this.render();
+      return this.showing;
     }
-    this.render();
+    this.showing = (async () => {
+      let done = 0;
+      while (done !== this.cur) {
+        done = this.cur;
+        await this.paintFrame(done);
+        this.render();
+      }
+    })();
+    try {
+      await this.showing;
+    } finally {
+      this.showing = null;
+    }
+  }
+
+  /** @type {Promise<void> | null} */
+  showing = null;
+
+  /**
+   * Has the worker paint frame `n` of the source (a blank frame without a source or pixels).
+   * @param {number} n
+   */
+  async paintFrame(n) {
+    const src = this.source;
+    const { width, height } = this.stage;
+    if (src?.kind === 'synth') {
+      await this.worker.render(n);
+      return;
+    }
+    let bitmap = null;
+    if (src) {
+      const grabbed = this.grabChain.then(() => src.frameAt(n));
+      this.grabChain = grabbed.then(
+        () => undefined,
+        () => undefined,
+      );
+      bitmap = await grabbed;
+    }
+    await this.worker.paint(width, height, bitmap);
   }
 
   // ---------------------------------------------------------------- selection and edits
@@ -507,7 +536,6 @@ export class App {
         h = Math.max(h, r.bbox.y + r.bbox.h);
       }
       this.stage.resize(Math.max(1, Math.ceil(w)), Math.max(1, Math.ceil(h)));
-      this.stage.blank();
       byId('empty').hidden = true;
     }
     this.frames = Math.max(this.frames, this.model.table.lastFrame());
@@ -570,14 +598,13 @@ export class App {
 
   /** Scores the table against the ground truth with the core's evaluator (frames seen so far). */
   score() {
-    const evaluate = /** @type {any} */ (this.core).evaluate;
-    if (!this.gt || typeof evaluate !== 'function') return;
+    if (!this.gt) return;
     const upto = this.tracking ? this.processed : this.lastFrame;
     const gt = this.gt.all().filter((r) => r.frame <= upto);
     const res = this.model.table.all().filter((r) => r.frame <= upto);
-    if (!gt.length) return;
+    if (!gt.length || upto < 1) return;
     try {
-      this.scores = evaluate(gt, res);
+      this.scores = this.core.evaluate(gt, res, upto, { similarity: 'box' });
     } catch (e) {
       this.status(`scoring failed: ${e instanceof Error ? e.message : e}`, true);
     }

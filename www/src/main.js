@@ -62,6 +62,7 @@ function exposeForTests(app) {
     /** A summary of the state, safe to serialise. */
     state: () => ({
       source: app.source ? { kind: app.source.kind, name: app.source.name, width: app.source.width, height: app.source.height } : null,
+      size: [app.stage.width, app.stage.height],
       frame: app.cur,
       processed: app.processed,
       frames: app.frames,

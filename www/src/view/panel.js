@@ -7,7 +7,7 @@ import { colorOf } from '../lib/colors.js';
 /**
  * @typedef {import('../model/tracks.js').TrackTable} TrackTable
  * @typedef {{ a: number | null, b: number | null }} Selection
- * @typedef {{ mota: number, idf1: number, hota: number, deta?: number, assa?: number, idsw?: number }} Scores
+ * @typedef {import('../../pkg/shapetrack.js').Scores} Scores  percentages, as TrackEval prints them
  */
 
 /** @param {HTMLElement} chip @param {number} id */
@@ -138,16 +138,16 @@ export class Panel {
   renderScores(s, source) {
     this.metricsSrc.textContent = source ? `vs ${source}` : '';
     if (!s) return;
-    const pct = (/** @type {number | undefined} */ v) => (v === undefined || !Number.isFinite(v) ? '–' : (v * 100).toFixed(1));
+    const pct = (/** @type {number} */ v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
     /** @type {Array<[string, string]>} */
     const cells = [
       ['MOTA', pct(s.mota)],
       ['IDF1', pct(s.idf1)],
       ['HOTA', pct(s.hota)],
+      ['DetA', pct(s.deta)],
+      ['AssA', pct(s.assa)],
+      ['IDSW', String(s.idsw)],
     ];
-    if (s.deta !== undefined) cells.push(['DetA', pct(s.deta)]);
-    if (s.assa !== undefined) cells.push(['AssA', pct(s.assa)]);
-    if (s.idsw !== undefined) cells.push(['IDSW', String(s.idsw)]);
     this.metrics.replaceChildren(
       ...cells.map(([k, v]) => h('div', { class: 'm', 'data-metric': k }, [h('div', { class: 'v' }, [v]), h('div', { class: 'k' }, [k])])),
     );

@@ -1,5 +1,6 @@
-// The stage: the video frame on one canvas and the overlay (masks, boxes, ids, trails) on a
-// second one above it, so a selection change redraws only the overlay.
+// The stage: the video frame on one canvas (painted by the tracker worker) and the overlay
+// (masks, boxes, ids, trails) on a second one above it, drawn here; a selection change
+// redraws only the overlay.
 
 import { colorOf } from '../lib/colors.js';
 
@@ -25,7 +26,6 @@ export class Stage {
     this.frameCanvas = frameCanvas;
     this.overlay = overlayCanvas;
     this.decode = decode;
-    this.fctx = /** @type {CanvasRenderingContext2D} */ (frameCanvas.getContext('2d', { alpha: false }));
     this.octx = /** @type {CanvasRenderingContext2D} */ (overlayCanvas.getContext('2d'));
     /**
      * Decoded, tinted masks by record object: edits make new record objects, so a renamed
@@ -33,6 +33,7 @@ export class Stage {
      * @type {WeakMap<TrackRecord, { canvas: OffscreenCanvas, bitmap: Bitmap } | null>}
      */
     this.maskCache = new WeakMap();
+    /** Image size (the frame canvas belongs to the worker: its size is kept here). */
     this.width = frameCanvas.width;
     this.height = frameCanvas.height;
     // Scale both canvases to fit the stage (up or down), keeping the aspect ratio; pointer
@@ -72,21 +73,7 @@ export class Stage {
     if (width === this.width && height === this.height) return;
     this.width = width;
     this.height = height;
-    this.frameCanvas.width = width;
-    this.frameCanvas.height = height;
     this.fit();
-  }
-
-  /** Draws a frame and releases its bitmap. @param {ImageBitmap} bitmap */
-  showFrame(bitmap) {
-    this.fctx.drawImage(bitmap, 0, 0, this.width, this.height);
-    bitmap.close();
-  }
-
-  /** A neutral frame when the pixels are not available (e.g. webcam history). */
-  blank() {
-    this.fctx.fillStyle = '#0b0c0e';
-    this.fctx.fillRect(0, 0, this.width, this.height);
   }
 
   /**

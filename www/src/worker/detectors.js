@@ -8,8 +8,8 @@
 
 /**
  * @typedef {import('../lib/core.js').Core} Core
- * @typedef {InstanceType<Core['FrameBuffer']>} FrameBuffer
- * @typedef {InstanceType<Core['Detections']>} Detections
+ * @typedef {import('../../pkg/shapetrack.js').FrameBuffer} FrameBuffer
+ * @typedef {import('../../pkg/shapetrack.js').Detections} Detections
  *
  * @typedef {{
  *   index: number,
@@ -73,12 +73,12 @@ export function createDetector(name, options = {}) {
  * @type {DetectorFactory}
  */
 function backgroundSubtractor(options) {
-  /** @type {InstanceType<Core['BackgroundDetector']> | null} */
+  /** @type {import('../../pkg/shapetrack.js').BackgroundDetector | null} */
   let bg = null;
   return {
     name: 'background',
-    init({ core, width, height }) {
-      bg = new core.BackgroundDetector(width, height, /** @type {any} */ (options));
+    init({ core }) {
+      bg = new core.BackgroundDetector(/** @type {import('../../pkg/shapetrack.js').BackgroundOptions} */ (options));
     },
     detect(frame) {
       if (!bg) throw new Error('background detector used before init');

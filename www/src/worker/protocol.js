@@ -1,18 +1,20 @@
 // The page ↔ tracker-worker protocol. Every request carries an `id`; the worker answers each
-// one exactly once, with `{ id, ok: true, ...result }` or `{ id, ok: false, error }`. Frames
-// travel as ImageBitmaps, transferred both ways (no copies): the page sends a video frame, the
-// worker writes its pixels into wasm memory and sends the bitmap back with the result, so the
-// page draws the very frame the overlay belongs to.
+// one exactly once, with `{ id, ok: true, ...result }` or `{ id, ok: false, error }`, in the
+// order the requests were sent. Video frames travel as transferred ImageBitmaps (no copies).
+// The worker paints the page's frame canvas (handed over once with `attach`), so the page
+// only draws overlays: a tracked frame is painted just before its result is posted.
 
 /**
  * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
+ * @typedef {import('../../pkg/shapetrack.js').TrackerConfig} TrackerConfig
+ * @typedef {import('../../pkg/shapetrack.js').ScenePreset} ScenePreset
  *
- * @typedef {{ kind: 'synth', preset?: string } | { kind: 'frames', width: number, height: number }} SourceSpec
+ * @typedef {{ kind: 'synth', preset?: ScenePreset } | { kind: 'frames', width: number, height: number }} SourceSpec
  *
  * @typedef {{
  *   source: SourceSpec,
  *   detector: string,
- *   tracker?: Record<string, unknown>,
+ *   tracker?: TrackerConfig,
  *   detectorOptions?: Record<string, unknown>,
  * }} OpenRequest
  *
@@ -22,7 +24,6 @@
  *
  * @typedef {{
  *   frame: number,
- *   bitmap: ImageBitmap | null,
  *   shapes: TrackRecord[],
  *   detections: number,
  *   groundTruth: TrackRecord[] | null,
@@ -30,6 +31,8 @@
  * }} StepResult
  *
  * @typedef {{ type: 'open' } & OpenRequest
+ *   | { type: 'attach', canvas: OffscreenCanvas }
+ *   | { type: 'paint', width: number, height: number, bitmap?: ImageBitmap | null }
  *   | { type: 'step', frame: number, bitmap?: ImageBitmap, display?: boolean }
  *   | { type: 'render', frame: number }
  *   | { type: 'finish' }
@@ -90,18 +93,35 @@ export class WorkerClient {
    * Tracks one frame. For a synthetic source the worker renders the frame itself.
    * @param {number} frame 1-based
    * @param {ImageBitmap} [bitmap] the frame's pixels (transferred), for video and image sources
-   * @param {boolean} [display] whether to send a bitmap back for display
+   * @param {boolean} [display] whether to paint the frame on the page's canvas
    * @returns {Promise<StepResult>}
    */
   step(frame, bitmap, display = true) {
     return this.request({ type: 'step', frame, bitmap, display }, bitmap ? [bitmap] : []);
   }
 
-  /** A synthetic frame for display (scrubbing), without tracking it. @param {number} frame */
+  /** Paints a synthetic frame (scrubbing), without tracking it. @param {number} frame */
   render(frame) {
-    return /** @type {Promise<{ bitmap: ImageBitmap, groundTruth: TrackRecord[] | null }>} */ (
-      this.request({ type: 'render', frame })
-    );
+    return /** @type {Promise<{ groundTruth: TrackRecord[] | null }>} */ (this.request({ type: 'render', frame }));
+  }
+
+  /**
+   * Hands the page's frame canvas to the worker, which paints every frame from then on.
+   * @param {{ transferControlToOffscreen(): OffscreenCanvas }} canvas the page's frame canvas
+   */
+  attach(canvas) {
+    const offscreen = canvas.transferControlToOffscreen();
+    return this.request({ type: 'attach', canvas: offscreen }, [offscreen]);
+  }
+
+  /**
+   * Paints a frame (a bitmap, transferred) or a blank one of the given size.
+   * @param {number} width
+   * @param {number} height
+   * @param {ImageBitmap | null} [bitmap]
+   */
+  paint(width, height, bitmap = null) {
+    return this.request({ type: 'paint', width, height, bitmap }, bitmap ? [bitmap] : []);
   }
 
   /** Runs the offline pass over everything tracked so far. @returns {Promise<{ records: TrackRecord[] }>} */

@@ -1,6 +1,10 @@
 // The tracker worker: one wasm instance, single-threaded, owning the frame buffer, the
 // detector, the tracker and (for the demo) the synthetic scene. The page stays responsive
 // while frames are tracked here. Protocol: ./protocol.js.
+//
+// The worker also paints the page's frame canvas (an OffscreenCanvas handed over once): a
+// tracked frame is painted straight from wasm memory right before its result is posted, so
+// the page only draws the overlay and no frame is copied back and forth.
 
 import { loadCore } from '../lib/core.js';
 import { createDetector } from './detectors.js';
@@ -16,10 +20,10 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
  *   memory: WebAssembly.Memory,
  *   width: number,
  *   height: number,
- *   buffer: InstanceType<Core['FrameBuffer']>,
- *   tracker: InstanceType<Core['Tracker']>,
+ *   buffer: import('../../pkg/shapetrack.js').FrameBuffer,
+ *   tracker: import('../../pkg/shapetrack.js').Tracker,
  *   detector: import('./detectors.js').Detector,
- *   scene: InstanceType<Core['SynthScene']> | null,
+ *   scene: import('../../pkg/shapetrack.js').SynthScene | null,
  *   canvas: OffscreenCanvas | null,
  *   ctx2d: OffscreenCanvasRenderingContext2D | null,
  * }} Session
@@ -27,6 +31,9 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
 
 /** @type {Session | null} */
 let session = null;
+
+/** The page's frame canvas, once attached. */
+let view = /** @type {{ canvas: OffscreenCanvas, ctx: OffscreenCanvasRenderingContext2D } | null} */ (null);
 
 /** Requests run one at a time, in order: the tracker is stateful and frames must not overlap. */
 let queue = Promise.resolve();
@@ -55,12 +62,20 @@ async function dispatch(req) {
   switch (req.type) {
     case 'open':
       return { result: await open(req), transfer: [] };
+    case 'attach': {
+      const ctx2d = /** @type {OffscreenCanvasRenderingContext2D} */ (req.canvas.getContext('2d', { alpha: false }));
+      view = { canvas: req.canvas, ctx: ctx2d };
+      return { result: {}, transfer: [] };
+    }
+    case 'paint':
+      paint(req.width, req.height, req.bitmap ?? null);
+      return { result: {}, transfer: [] };
     case 'step':
-      return step(req.frame, req.bitmap ?? null, req.display !== false);
+      return { result: await step(req.frame, req.bitmap ?? null, req.display !== false), transfer: [] };
     case 'render':
-      return render(req.frame);
+      return { result: render(req.frame), transfer: [] };
     case 'finish':
-      return { result: { records: need().tracker.finish() }, transfer: [] };
+      return { result: { records: finish() }, transfer: [] };
     case 'tracks':
       return { result: { records: need().tracker.tracks() }, transfer: [] };
     case 'close':
@@ -89,14 +104,14 @@ function close() {
 async function open(req) {
   close();
   const { core, memory } = await loadCore();
-  /** @type {InstanceType<Core['SynthScene']> | null} */
+  /** @type {import('../../pkg/shapetrack.js').SynthScene | null} */
   let scene = null;
   let width;
   let height;
   let frames = null;
   let fps = 25;
   if (req.source.kind === 'synth') {
-    scene = new core.SynthScene(req.source.preset ?? 'demo');
+    scene = new core.SynthScene(/** @type {import('../../pkg/shapetrack.js').ScenePreset} */ (req.source.preset ?? 'demo'));
     width = scene.width;
     height = scene.height;
     frames = scene.frames;
@@ -106,7 +121,7 @@ async function open(req) {
     height = req.source.height;
   }
   const buffer = new core.FrameBuffer(width, height);
-  const tracker = new core.Tracker(/** @type {any} */ (req.tracker ?? {}));
+  const tracker = new core.Tracker(req.tracker ?? {});
   const detector = createDetector(req.detector, req.detectorOptions);
   await detector.init({ core, width, height });
   session = { core, memory, width, height, buffer, tracker, detector, scene, canvas: null, ctx2d: null };
@@ -139,21 +154,52 @@ function load(s, bitmap) {
   pixels(s).set(img.data);
 }
 
-/** A bitmap of the frame buffer, for the page to draw. @param {Session} s */
-function snapshot(s) {
-  const img = new ImageData(pixels(s).slice(), s.width, s.height);
-  return createImageBitmap(img);
+/**
+ * Paints the page's frame canvas: a bitmap, or (none given) a blank frame, at `width×height`.
+ * @param {number} width
+ * @param {number} height
+ * @param {ImageBitmap | null} bitmap
+ */
+function paint(width, height, bitmap) {
+  if (!view) return;
+  if (view.canvas.width !== width || view.canvas.height !== height) {
+    view.canvas.width = width;
+    view.canvas.height = height;
+  }
+  if (bitmap) {
+    view.ctx.drawImage(bitmap, 0, 0, width, height);
+    bitmap.close();
+  } else {
+    view.ctx.fillStyle = '#0b0c0e';
+    view.ctx.fillRect(0, 0, width, height);
+  }
 }
 
 /**
+ * Paints the frame buffer (the pixels wasm just worked on) without copying it first: the
+ * ImageData is a view on wasm memory, put straight onto the canvas.
+ * @param {Session} s
+ */
+function paintBuffer(s) {
+  if (!view) return;
+  if (view.canvas.width !== s.width || view.canvas.height !== s.height) {
+    view.canvas.width = s.width;
+    view.canvas.height = s.height;
+  }
+  view.ctx.putImageData(new ImageData(pixels(s), s.width, s.height), 0, 0);
+}
+
+/**
+ * Tracks one frame; paints it on the page's canvas when `display`.
  * @param {number} frame
  * @param {ImageBitmap | null} bitmap
  * @param {boolean} display
+ * @returns {Promise<Omit<import('./protocol.js').StepResult, 'bitmap'>>}
  */
 async function step(frame, bitmap, display) {
   const s = need();
   const t0 = performance.now();
-  /** @type {InstanceType<Core['SceneFrame']> | null} */
+  /** @type {import('../../pkg/shapetrack.js').SceneFrame | null} */
   let sceneFrame = null;
   if (s.scene) {
     sceneFrame = s.scene.render(frame, s.buffer);
@@ -171,7 +217,7 @@ async function step(frame, bitmap, display) {
     bitmap,
     scene: sceneFrame ? sceneFrame.detections() : null,
   });
-  const dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(/** @type {any} */ (out), s.width, s.height);
+  const dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(out);
   const t2 = performance.now();
   const detections = dets.len;
   const shapes = s.tracker.update(frame, s.buffer, dets);
@@ -179,35 +225,42 @@ async function step(frame, bitmap, display) {
   const t3 = performance.now();
   const groundTruth = sceneFrame ? sceneFrame.groundTruth() : null;
   sceneFrame?.free();
-  /** @type {Transferable[]} */
-  const transfer = [];
-  let shown = null;
   if (display) {
-    shown = bitmap ?? (await snapshot(s));
-    transfer.push(shown);
+    if (bitmap) paint(s.width, s.height, bitmap);
+    else paintBuffer(s);
   } else {
     bitmap?.close();
   }
   return {
-    result: {
-      frame,
-      bitmap: shown,
-      shapes,
-      detections,
-      groundTruth,
-      timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
-    },
-    transfer,
+    frame,
+    shapes,
+    detections,
+    groundTruth,
+    timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
   };
 }
 
-/** @param {number} frame */
-async function render(frame) {
+/**
+ * The offline pass over everything tracked so far.
+ * @returns {import('../../pkg/shapetrack.js').Records}
+ */
+function finish() {
+  const t = /** @type {any} */ (need().tracker);
+  // The core's offline re-linker (thesis ch. 5) is bound as Tracker.finish once it exists.
+  if (typeof t.finish !== 'function') throw new Error('the offline re-linker is not in this build of the core yet');
+  return t.finish();
+}
+
+/**
+ * Renders and paints a synthetic frame (scrubbing), without tracking it.
+ * @param {number} frame
+ */
+function render(frame) {
   const s = need();
   if (!s.scene) throw new Error('only the synthetic source renders frames in the worker');
   const sf = s.scene.render(frame, s.buffer);
   const groundTruth = sf.groundTruth();
   sf.free();
-  const bitmap = await snapshot(s);
-  return { result: { bitmap, groundTruth }, transfer: [bitmap] };
+  paintBuffer(s);
+  return { groundTruth };
 }
