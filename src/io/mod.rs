@@ -6,8 +6,13 @@
 //! what was expected. Readers are strict except where MOTChallenge itself is lenient: trailing
 //! fields, CRLF line ends, blank lines, comma or whitespace separators.
 
+pub mod coco_video;
+pub mod cvat;
+pub mod layout;
 pub mod motchallenge;
+pub mod png_masks;
 pub mod rle;
+pub mod vot;
 
 use crate::frame::{BBox, Mask, TrackedShape};
 pub use rle::{Rle, RleError};
@@ -125,6 +130,19 @@ pub fn read_text(path: &std::path::Path) -> Result<String, IoError> {
         file: path.display().to_string(),
         source,
     })
+}
+
+/// The 1-based line and column (in characters) of byte `offset` of `text`, for error messages.
+/// Offsets past the end (or inside a multi-byte character) are clamped to a valid position.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
 }
 
 /// Writes a whole text file, naming the file in the error.

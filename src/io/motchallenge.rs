@@ -120,7 +120,7 @@ pub fn parse_mot(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
 /// frame then id. Numbers use the shortest text that reads back to the same `f64`.
 pub fn write_mot(records: &[Record]) -> String {
     let mut rs: Vec<&Record> = records.iter().collect();
-    rs.sort_by(|a, b| (a.frame, a.id).cmp(&(b.frame, b.id)));
+    rs.sort_by_key(|r| (r.frame, r.id));
     let mut s = String::with_capacity(rs.len() * 48);
     for r in rs {
         let _ = writeln!(
@@ -216,7 +216,7 @@ pub fn parse_mots(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
 /// mask are skipped (MOTS has no box-only form).
 pub fn write_mots(records: &[Record]) -> String {
     let mut rs: Vec<&Record> = records.iter().filter(|r| r.mask.is_some()).collect();
-    rs.sort_by(|a, b| (a.frame, a.id).cmp(&(b.frame, b.id)));
+    rs.sort_by_key(|r| (r.frame, r.id));
     let mut s = String::new();
     for r in rs {
         if let Some(m) = &r.mask {

@@ -16,7 +16,11 @@ use std::process::ExitCode;
 pub type CliResult = Result<(), Box<dyn std::error::Error>>;
 
 #[derive(Parser)]
-#[command(name = "shapetrack", version, about = "Multi-object shape tracker: track, evaluate, synthesise, benchmark")]
+#[command(
+    name = "shapetrack",
+    version,
+    about = "Multi-object shape tracker: track, evaluate, synthesise, benchmark"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,

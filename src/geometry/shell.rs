@@ -1,0 +1,557 @@
+//! Convex shells: the convex polygons the region estimator intersects, and the Delaunay mesh
+//! whose outer boundary they are (thesis §3.2.5, property 5).
+//!
+//! Orientation convention: a shell's vertices run counter-clockwise in the mathematical sense,
+//! i.e. their shoelace area `½Σ(xᵢ·yᵢ₊₁ − xᵢ₊₁·yᵢ)` is positive. Image y grows downwards, so on
+//! screen the same polygon appears clockwise. This is the orientation parry2d expects for its
+//! `ConvexPolygon` (outward normals on the right of each edge in y-up terms).
+
+use serde::{Deserialize, Serialize};
+use spade::{DelaunayTriangulation, Point2, Triangulation};
+
+use super::gjk::PreparedShell;
+use super::GeometryError;
+use crate::frame::{BBox, Point};
+
+/// Distance under which two shells count as touching, in pixels.
+///
+/// Used as slack wherever a cheap bounding-box test decides that a pair cannot intersect, so the
+/// broad phase never rejects a pair the exact test (parry2d's f32 GJK, whose own tolerance is
+/// about 1e-6 of the shapes' size) might accept. A thousandth of a pixel is far below anything
+/// the tracker can see and far above f32 rounding for shapes up to ~10⁴ px across.
+pub const TOUCH_TOLERANCE: f64 = 1e-3;
+
+/// Absolute tolerance of [`ConvexShell::contains`], in pixels: hull construction and
+/// translation round coordinates, so a point that was used to build the hull may end up a few
+/// ulps outside it.
+pub const CONTAINS_TOLERANCE: f64 = 1e-7;
+
+/// Largest angle (radians) one polygon edge may turn through when [`ConvexShell::grown`]
+/// rounds a corner. π/4 makes a grown point an octagon circumscribing the disc; the grown shell
+/// then overshoots the exact Minkowski sum by at most `margin·(1/cos(π/8) − 1) ≈ 8%` of the
+/// margin, a fair trade for few vertices (GJK cost grows with vertex count).
+const MAX_ARC_STEP: f64 = std::f64::consts::FRAC_PI_4;
+
+/// A convex polygon in f64 image coordinates, vertices counter-clockwise (positive shoelace
+/// area), no repeated and no collinear vertices.
+///
+/// Degenerate shells are valid: no vertex (nothing, intersects nothing), one vertex (a point)
+/// or two (a segment) — what a one-pixel or one-line mask gives.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(try_from = "Vec<Point>", into = "Vec<Point>")]
+pub struct ConvexShell {
+    vertices: Vec<Point>,
+}
+
+impl TryFrom<Vec<Point>> for ConvexShell {
+    type Error = GeometryError;
+
+    /// Rebuilds the hull, so deserialised data always satisfies the invariants.
+    fn try_from(points: Vec<Point>) -> Result<Self, GeometryError> {
+        ConvexShell::from_points(&points)
+    }
+}
+
+impl From<ConvexShell> for Vec<Point> {
+    fn from(s: ConvexShell) -> Vec<Point> {
+        s.vertices
+    }
+}
+
+impl ConvexShell {
+    /// The empty shell.
+    pub fn empty() -> Self {
+        Self::default()
+    }
+
+    /// The convex hull of `points` (Andrew's monotone chain, `O(n log n)`). Duplicates and
+    /// collinear points are dropped. Rejects non-finite coordinates.
+    pub fn from_points(points: &[Point]) -> Result<Self, GeometryError> {
+        if let Some(p) = points
+            .iter()
+            .find(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(GeometryError::NonFinitePoint { x: p.x, y: p.y });
+        }
+        Ok(Self {
+            vertices: convex_hull(points.to_vec()),
+        })
+    }
+
+    /// The box's four corners (a segment or point when the box is flat). Rejects invalid boxes.
+    pub fn from_bbox(b: &BBox) -> Result<Self, GeometryError> {
+        if !b.is_valid() {
+            return Err(GeometryError::InvalidBox {
+                x: b.x,
+                y: b.y,
+                w: b.w,
+                h: b.h,
+            });
+        }
+        Self::from_points(&b.corners())
+    }
+
+    /// Vertices, counter-clockwise (positive shoelace area), starting at the smallest `(x, y)`.
+    pub fn vertices(&self) -> &[Point] {
+        &self.vertices
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Whether the shell has no vertex.
+    pub fn is_empty(&self) -> bool {
+        self.vertices.is_empty()
+    }
+
+    /// The shell moved by `(dx, dy)`. A non-finite offset is treated as zero: offsets come from
+    /// motion prediction, and a diverged filter must not poison every later intersection test.
+    pub fn translated(&self, dx: f64, dy: f64) -> ConvexShell {
+        let dx = if dx.is_finite() { dx } else { 0.0 };
+        let dy = if dy.is_finite() { dy } else { 0.0 };
+        let moved: Vec<Point> = self
+            .vertices
+            .iter()
+            .map(|p| Point::new(p.x + dx, p.y + dy))
+            .collect();
+        if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            // Translation keeps convexity, but rounding can make nearly collinear vertices
+            // collinear; rebuilding the hull keeps the invariant exact.
+            ConvexShell {
+                vertices: convex_hull(moved),
+            }
+        } else {
+            self.clone()
+        }
+    }
+
+    /// The shell grown outwards by `margin`: a convex polygon that contains the Minkowski sum
+    /// of the shell with a disc of radius `margin` (every point within `margin` of the shell)
+    /// and exceeds it by at most ~8% of `margin`.
+    ///
+    /// Every edge moves outwards by exactly `margin`; each corner is rounded by tangent segments
+    /// at most π/4 apart. A point grows into an octagon, a segment into a stadium-like octagon.
+    /// A margin that is not a positive finite number returns the shell unchanged.
+    pub fn grown(&self, margin: f64) -> ConvexShell {
+        if !(margin > 0.0 && margin.is_finite()) || self.vertices.is_empty() {
+            return self.clone();
+        }
+        let n = self.vertices.len();
+        let mut out = Vec::with_capacity(n * 3);
+        // Outward normal directions (angles) of each edge i → i+1. For a point the "edges" are
+        // undefined, so the whole turn of 2π happens at its single corner.
+        let edge_angle = |i: usize| -> f64 {
+            let a = self.vertices[i];
+            let b = self.vertices[(i + 1) % n];
+            // Outward normal of a CCW edge (y-up sense) is the edge direction turned clockwise.
+            (-(b.x - a.x)).atan2(b.y - a.y)
+        };
+        for i in 0..n {
+            let v = self.vertices[i];
+            let (start, turn) = if n == 1 {
+                (0.0, std::f64::consts::TAU)
+            } else {
+                let prev = edge_angle((i + n - 1) % n);
+                let next = edge_angle(i);
+                let mut turn = next - prev;
+                while turn < 0.0 {
+                    turn += std::f64::consts::TAU;
+                }
+                while turn > std::f64::consts::TAU {
+                    turn -= std::f64::consts::TAU;
+                }
+                // A segment's two "edges" are antiparallel: each end turns through π.
+                (prev, turn)
+            };
+            let steps = ((turn / MAX_ARC_STEP).ceil() as usize).max(1);
+            let step = turn / steps as f64;
+            // Corner of two tangent lines `step` apart sits at margin / cos(step/2) along the
+            // bisector: this circumscribes the arc, so the polygon contains the exact sum.
+            let r = margin / (step / 2.0).cos();
+            for k in 0..steps {
+                let a = start + step * (k as f64 + 0.5);
+                out.push(Point::new(v.x + r * a.cos(), v.y + r * a.sin()));
+            }
+        }
+        if out.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            ConvexShell {
+                vertices: convex_hull(out),
+            }
+        } else {
+            self.clone()
+        }
+    }
+
+    /// The convex hull of the shell and its copy moved by `(dx, dy)`: the area swept by a
+    /// shape moving in a straight line, for gating shapes that moved more than their own size.
+    pub fn swept(&self, dx: f64, dy: f64) -> ConvexShell {
+        let moved = self.translated(dx, dy);
+        let mut pts = self.vertices.clone();
+        pts.extend_from_slice(&moved.vertices);
+        ConvexShell {
+            vertices: convex_hull(pts),
+        }
+    }
+
+    /// Axis-aligned bounding box (the zero box when empty).
+    pub fn aabb(&self) -> BBox {
+        let Some(first) = self.vertices.first() else {
+            return BBox::default();
+        };
+        let (mut x0, mut y0, mut x1, mut y1) = (first.x, first.y, first.x, first.y);
+        for p in &self.vertices[1..] {
+            x0 = x0.min(p.x);
+            y0 = y0.min(p.y);
+            x1 = x1.max(p.x);
+            y1 = y1.max(p.y);
+        }
+        BBox::from_xyxy(x0, y0, x1, y1)
+    }
+
+    /// Area (0 for points and segments).
+    pub fn area(&self) -> f64 {
+        signed_area(&self.vertices).max(0.0)
+    }
+
+    /// Area centroid; the vertex mean for points and segments; `None` when empty.
+    pub fn center(&self) -> Option<Point> {
+        let n = self.vertices.len();
+        if n == 0 {
+            return None;
+        }
+        let o = self.vertices[0];
+        let mean = || {
+            let s = self
+                .vertices
+                .iter()
+                .fold(Point::default(), |acc, &p| acc + (p - o));
+            o + s * (1.0 / n as f64)
+        };
+        if n < 3 {
+            return Some(mean());
+        }
+        // Relative to the first vertex so large image coordinates do not cancel.
+        let (mut a2, mut cx, mut cy) = (0.0, 0.0, 0.0);
+        for i in 0..n {
+            let p = self.vertices[i] - o;
+            let q = self.vertices[(i + 1) % n] - o;
+            let c = p.x * q.y - q.x * p.y;
+            a2 += c;
+            cx += (p.x + q.x) * c;
+            cy += (p.y + q.y) * c;
+        }
+        if a2.abs() <= f64::MIN_POSITIVE {
+            return Some(mean());
+        }
+        Some(o + Point::new(cx / (3.0 * a2), cy / (3.0 * a2)))
+    }
+
+    /// Whether `p` lies in the closed shell, within [`CONTAINS_TOLERANCE`] pixels.
+    pub fn contains(&self, p: Point) -> bool {
+        self.contains_within(p, CONTAINS_TOLERANCE)
+    }
+
+    /// Whether `p` lies within distance `tol` of the closed shell (approximately: for polygons
+    /// the test is against each edge's line, which is exact inside and up to `tol·√2` loose
+    /// near sharp corners).
+    pub fn contains_within(&self, p: Point, tol: f64) -> bool {
+        match self.vertices.len() {
+            0 => false,
+            1 => self.vertices[0].dist(p) <= tol,
+            2 => point_segment_distance(p, self.vertices[0], self.vertices[1]) <= tol,
+            n => (0..n).all(|i| {
+                let a = self.vertices[i];
+                let b = self.vertices[(i + 1) % n];
+                let e = b - a;
+                let len = e.x.hypot(e.y);
+                // Signed distance of p to the edge's line, positive inside (left of a CCW edge).
+                cross(e, p - a) >= -tol * len
+            }),
+        }
+    }
+
+    /// The vertex furthest in direction `d` (thesis eq. 12); `None` when empty. Ties go to the
+    /// first such vertex so results are repeatable.
+    pub fn support(&self, d: Point) -> Option<Point> {
+        let mut best: Option<(f64, Point)> = None;
+        for &v in &self.vertices {
+            let s = v.x * d.x + v.y * d.y;
+            if best.is_none_or(|(bs, _)| s > bs) {
+                best = Some((s, v));
+            }
+        }
+        best.map(|(_, v)| v)
+    }
+
+    /// Whether the two closed shells intersect (touching counts, up to f32 rounding), by
+    /// parry2d's GJK after a bounding-box early-out. Empty shells intersect nothing.
+    pub fn intersects(&self, other: &ConvexShell) -> bool {
+        if !aabbs_overlap(&self.aabb(), &other.aabb(), TOUCH_TOLERANCE)
+            || self.is_empty()
+            || other.is_empty()
+        {
+            return false;
+        }
+        PreparedShell::new(self).intersects(&PreparedShell::new(other))
+    }
+
+    /// Euclidean distance between the shells (0 when they intersect), by parry2d's GJK, which
+    /// stops when its bounds agree to ~0.35% (relative) — meant for gating, not measuring;
+    /// `f64::INFINITY` when either is empty.
+    pub fn distance(&self, other: &ConvexShell) -> f64 {
+        PreparedShell::new(self).distance(&PreparedShell::new(other))
+    }
+}
+
+/// Whether two boxes overlap or lie within `slack` of each other (closed test).
+pub(crate) fn aabbs_overlap(a: &BBox, b: &BBox, slack: f64) -> bool {
+    a.x <= b.x2() + slack && b.x <= a.x2() + slack && a.y <= b.y2() + slack && b.y <= a.y2() + slack
+}
+
+/// 2-D cross product (z of the 3-D one).
+#[inline]
+pub(crate) fn cross(a: Point, b: Point) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Shoelace area, positive for counter-clockwise (y-up sense) polygons.
+pub(crate) fn signed_area(poly: &[Point]) -> f64 {
+    let n = poly.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let o = poly[0];
+    let mut s = 0.0;
+    for i in 1..n - 1 {
+        s += cross(poly[i] - o, poly[i + 1] - o);
+    }
+    s / 2.0
+}
+
+/// Distance from `p` to the segment `ab`.
+pub(crate) fn point_segment_distance(p: Point, a: Point, b: Point) -> f64 {
+    let ab = b - a;
+    let l2 = ab.x * ab.x + ab.y * ab.y;
+    if l2 <= 0.0 {
+        return p.dist(a);
+    }
+    let t = (((p.x - a.x) * ab.x + (p.y - a.y) * ab.y) / l2).clamp(0.0, 1.0);
+    p.dist(a + ab * t)
+}
+
+/// Andrew's monotone chain. Points must be finite. Returns the hull CCW (positive area) from the
+/// smallest `(x, y)`, without duplicate or collinear vertices; 0–2 points for degenerate input.
+pub(crate) fn convex_hull(mut pts: Vec<Point>) -> Vec<Point> {
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.dedup();
+    if pts.len() <= 2 {
+        return pts;
+    }
+    let mut hull: Vec<Point> = Vec::with_capacity(pts.len() + 1);
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &Point>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in iter {
+            while hull.len() >= start + 2 {
+                let a = hull[hull.len() - 2];
+                let b = hull[hull.len() - 1];
+                if cross(b - a, p - a) <= 0.0 {
+                    hull.pop();
+                } else {
+                    break;
+                }
+            }
+            hull.push(p);
+        }
+        // The last point of each chain is the first of the other.
+        hull.pop();
+    }
+    if hull.len() == 2 && hull[0] == hull[1] {
+        hull.truncate(1);
+    }
+    hull
+}
+
+/// A triangle mesh for drawing: the Delaunay triangulation behind a shell.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Mesh {
+    /// Vertex positions in image coordinates.
+    pub vertices: Vec<Point>,
+    /// Triangles as indices into `vertices`, each counter-clockwise (positive area).
+    pub triangles: Vec<[usize; 3]>,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The Delaunay triangulation (spade) of `points`, computed relative to `origin` so the
+    /// robust predicates see small coordinates. Fewer than three non-collinear points give a
+    /// mesh with vertices and no triangle.
+    pub fn delaunay(points: &[Point], origin: Point) -> Result<Mesh, GeometryError> {
+        let local: Vec<Point2<f64>> = points
+            .iter()
+            .map(|p| Point2::new(p.x - origin.x, p.y - origin.y))
+            .collect();
+        // The stable bulk load keeps vertex handles in input order, so the mesh indexes the
+        // caller's points and the result does not depend on hashing or insertion order.
+        let tri = DelaunayTriangulation::<Point2<f64>>::bulk_load_stable(local).map_err(|e| {
+            GeometryError::Triangulation {
+                reason: format!("{e:?}"),
+            }
+        })?;
+        let vertices: Vec<Point> = tri
+            .vertices()
+            .map(|v| {
+                let p = v.position();
+                Point::new(p.x + origin.x, p.y + origin.y)
+            })
+            .collect();
+        let triangles = tri
+            .inner_faces()
+            .map(|f| {
+                let [a, b, c] = f.vertices();
+                [a.fix().index(), b.fix().index(), c.fix().index()]
+            })
+            .collect();
+        Ok(Mesh {
+            vertices,
+            triangles,
+        })
+    }
+
+    /// The outer boundary of the mesh (thesis: "the triangular mesh's outermost boundary forms
+    /// a convex polygon shell"), rebuilt as a [`ConvexShell`] from the triangles' vertices;
+    /// for a mesh without triangles, the hull of its vertices.
+    pub fn outer_boundary(&self) -> ConvexShell {
+        let pts: Vec<Point> = if self.triangles.is_empty() {
+            self.vertices.clone()
+        } else {
+            self.triangles
+                .iter()
+                .flat_map(|t| t.iter().filter_map(|&i| self.vertices.get(i).copied()))
+                .collect()
+        };
+        ConvexShell {
+            vertices: convex_hull(pts),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sq() -> ConvexShell {
+        ConvexShell::from_points(&[
+            Point::new(0.0, 0.0),
+            Point::new(4.0, 0.0),
+            Point::new(4.0, 4.0),
+            Point::new(0.0, 4.0),
+            Point::new(2.0, 2.0),
+            Point::new(2.0, 0.0),
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn hull_drops_interior_and_collinear_points() {
+        let s = sq();
+        assert_eq!(
+            s.vertices(),
+            &[
+                Point::new(0.0, 0.0),
+                Point::new(4.0, 0.0),
+                Point::new(4.0, 4.0),
+                Point::new(0.0, 4.0)
+            ]
+        );
+        assert!((s.area() - 16.0).abs() < 1e-12);
+        assert!(signed_area(s.vertices()) > 0.0);
+        assert_eq!(s.center(), Some(Point::new(2.0, 2.0)));
+    }
+
+    #[test]
+    fn degenerate_hulls() {
+        let p = ConvexShell::from_points(&[Point::new(1.0, 1.0); 3]).unwrap();
+        assert_eq!(p.len(), 1);
+        let s = ConvexShell::from_points(&[
+            Point::new(0.0, 0.0),
+            Point::new(2.0, 2.0),
+            Point::new(1.0, 1.0),
+        ])
+        .unwrap();
+        assert_eq!(s.len(), 2);
+        assert!(s.contains(Point::new(0.5, 0.5)));
+        assert!(!s.contains(Point::new(0.5, 0.6)));
+        assert!(ConvexShell::from_points(&[]).unwrap().is_empty());
+        assert!(matches!(
+            ConvexShell::from_points(&[Point::new(f64::NAN, 0.0)]),
+            Err(GeometryError::NonFinitePoint { .. })
+        ));
+    }
+
+    #[test]
+    fn grown_point_is_octagon_around_disc() {
+        let p = ConvexShell::from_points(&[Point::new(10.0, 10.0)]).unwrap();
+        let g = p.grown(2.0);
+        assert_eq!(g.len(), 8);
+        for k in 0..64 {
+            let a = k as f64 / 64.0 * std::f64::consts::TAU;
+            assert!(g.contains(Point::new(10.0 + 2.0 * a.cos(), 10.0 + 2.0 * a.sin())));
+        }
+        // Overshoot bound: no vertex further than margin / cos(π/8).
+        for v in g.vertices() {
+            assert!(
+                v.dist(Point::new(10.0, 10.0)) <= 2.0 / (std::f64::consts::PI / 8.0).cos() + 1e-9
+            );
+        }
+        assert_eq!(p.grown(-1.0), p);
+        assert_eq!(p.grown(f64::NAN), p);
+    }
+
+    #[test]
+    fn translated_and_swept() {
+        let s = sq().translated(1.0, -1.0);
+        assert_eq!(s.aabb(), BBox::new(1.0, -1.0, 4.0, 4.0));
+        assert_eq!(sq().translated(f64::INFINITY, 0.0), sq());
+        let w = sq().swept(10.0, 0.0);
+        assert_eq!(w.aabb(), BBox::new(0.0, 0.0, 14.0, 4.0));
+        assert!((w.area() - 56.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn serde_rebuilds_hull() {
+        let json = "[{\"x\":0,\"y\":0},{\"x\":0,\"y\":4},{\"x\":4,\"y\":0},{\"x\":1,\"y\":1}]";
+        let s: ConvexShell = serde_json::from_str(json).unwrap();
+        assert_eq!(s.len(), 3);
+        assert!(signed_area(s.vertices()) > 0.0);
+    }
+
+    #[test]
+    fn delaunay_boundary_is_hull() {
+        let pts = [
+            Point::new(100.0, 100.0),
+            Point::new(104.0, 100.0),
+            Point::new(104.0, 104.0),
+            Point::new(100.0, 104.0),
+            Point::new(102.0, 102.0),
+        ];
+        let m = Mesh::delaunay(&pts, Point::new(100.0, 100.0)).unwrap();
+        assert_eq!(m.triangle_count(), 4);
+        assert_eq!(m.vertices, pts.to_vec());
+        for t in &m.triangles {
+            let tri = [m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]];
+            assert!(signed_area(&tri) > 0.0);
+        }
+        assert_eq!(m.outer_boundary(), ConvexShell::from_points(&pts).unwrap());
+    }
+}
