@@ -10,6 +10,8 @@
 //   node scripts/test.mjs --only=e2e   steps whose name contains "e2e" (plus their builds)
 
 import { spawnSync } from 'node:child_process';
+import { readFileSync, readdirSync } from 'node:fs';
+import { join } from 'node:path';
 import { ROOT, setup } from './setup.mjs';
 import { buildWasm } from './build-wasm.mjs';
 
@@ -30,6 +32,14 @@ function sh(cmd, args, env = {}) {
 const npx = (/** @type {string[]} */ args) => sh('npx', ['--no-install', ...args]);
 const WASM = ['--target', 'wasm32-unknown-unknown', '--no-default-features'];
 
+/** The integration tests that run in wasm: `--test NAME` for each tests/*.rs using wasm-bindgen-test. */
+function wasmTests() {
+  const dir = join(ROOT, 'tests');
+  return readdirSync(dir)
+    .filter((f) => f.endsWith('.rs') && readFileSync(join(dir, f), 'utf8').includes('wasm_bindgen_test'))
+    .flatMap((f) => ['--test', f.slice(0, -3)]);
+}
+
 /** @type {Step[]} */
 const steps = [
   { name: 'setup', run: () => setup({ e2e: true }) },
@@ -39,14 +49,14 @@ const steps = [
     // src/wasm.rs only exists for wasm32, so the native clippy run never sees it.
     name: 'cargo clippy wasm32',
     needs: ['setup'],
-    run: () => sh('cargo', ['clippy', ...WASM, '--lib', '--test', 'wasm_bindings', '--', '-D', 'warnings']),
+    run: () => sh('cargo', ['clippy', ...WASM, '--lib', ...wasmTests(), '--', '-D', 'warnings']),
   },
   { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test']) },
   {
     name: 'wasm-bindgen tests',
     needs: ['setup'],
     run: () =>
-      sh('cargo', ['test', ...WASM, '--test', 'wasm_bindings'], {
+      sh('cargo', ['test', ...WASM, ...wasmTests()], {
         CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER: 'wasm-bindgen-test-runner',
       }),
   },

@@ -79,6 +79,8 @@ function exposeForTests(app) {
     /** Every record as the table holds it (frame, id, bbox, ...). */
     records: () => app.model.table.all(),
     groundTruth: () => app.gt?.all() ?? [],
+    /** What the tracker in the worker reported, for checking the page lost nothing. */
+    trackerRecords: () => app.worker.request({ type: 'tracks' }).then((r) => /** @type {any} */ (r).records),
   };
   /** @type {any} */ (window).__shapetrack = api;
   window.dispatchEvent(new Event('shapetrack-ready'));

@@ -129,7 +129,7 @@ export class Stage {
       for (const r of records) {
         const m = this.mask(r);
         if (!m) continue;
-        ctx.globalAlpha = selected(r.id) ? 0.6 : anySelected ? 0.18 : 0.4;
+        ctx.globalAlpha = selected(r.id) ? 0.65 : anySelected ? 0.2 : 0.45;
         ctx.drawImage(m.canvas, m.bitmap.x, m.bitmap.y);
       }
       ctx.globalAlpha = 1;

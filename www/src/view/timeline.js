@@ -107,14 +107,23 @@ export class Timeline {
     ctx.drawImage(this.bars, 0, 0);
     const w = canvas.width - GUTTER;
     const fx = (/** @type {number} */ f) => GUTTER + ((f - 1) / this.frames) * w;
-    // Selected rows: a frame around the whole row.
+    // Selected rows: a light band across the whole row and a marker in the gutter, visible
+    // even when rows are 2 px high.
     for (const id of [s.selection.a, s.selection.b]) {
       if (id === null) continue;
       const row = this.ids.indexOf(id) - this.scroll;
       if (row < 0 || row >= this.visibleRows()) continue;
-      ctx.strokeStyle = '#fff';
-      ctx.lineWidth = Math.max(1, dpr);
-      ctx.strokeRect(GUTTER - 0.5, 2 + row * this.rowH - 0.5, w, this.rowH);
+      const y = 2 + row * this.rowH;
+      const band = Math.max(this.rowH, 4 * dpr);
+      const top = y + this.rowH / 2 - band / 2;
+      ctx.fillStyle = 'rgba(255,255,255,0.16)';
+      ctx.fillRect(GUTTER, top, w, band);
+      ctx.fillStyle = '#fff';
+      ctx.beginPath();
+      ctx.moveTo(GUTTER - 2, y + this.rowH / 2);
+      ctx.lineTo(GUTTER - 2 - 6 * dpr, top - 2 * dpr);
+      ctx.lineTo(GUTTER - 2 - 6 * dpr, top + band + 2 * dpr);
+      ctx.fill();
     }
     const x = fx(s.frame) + w / this.frames / 2;
     ctx.fillStyle = '#fff';
