@@ -16,7 +16,8 @@ use crate::detect::{
 };
 use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Summary};
 use crate::frame::{BBox, Detection, Frame, FrameError, Mask, Point, TrackState, TrackedShape};
-use crate::io::{self, Record, RecordFlags, Rle};
+use crate::io::{coco_video, cvat, motchallenge, Record, RecordFlags, Rle};
+use std::collections::BTreeMap;
 use crate::synth::{Scene, SynthConfig};
 use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
 use serde::{Deserialize, Serialize};
@@ -369,27 +370,226 @@ pub enum Format {
     Mot,
     /// MOTS txt: `frame id class height width rle` per line.
     Mots,
+    /// COCO-video / YouTube-VIS JSON (ground-truth form; the results list is read too).
+    CocoVideo,
+    /// CVAT for video 1.1 XML.
+    Cvat,
+}
+
+/// A class and its name (COCO categories, CVAT labels).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+pub struct LabelJs {
+    /// Class id, as in the records.
+    pub class: i32,
+    /// Name.
+    pub name: String,
+}
+
+/// A file's records and what it says about its sequence.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct Annotations {
+    /// The records (of the first video, for a COCO file with several).
+    pub records: Records,
+    /// Frame width, when the file gives it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub width: Option<u32>,
+    /// Frame height, when the file gives it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub height: Option<u32>,
+    /// Number of frames, when the file gives it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub frames: Option<u32>,
+    /// Class names, when the file gives them.
+    pub labels: Vec<LabelJs>,
+    /// Videos in the file (COCO files may hold several; only the first is read).
+    pub videos: u32,
+}
+
+impl Annotations {
+    fn plain(records: &[Record]) -> Self {
+        Annotations {
+            records: from_core_records(records),
+            width: None,
+            height: None,
+            frames: None,
+            labels: Vec::new(),
+            videos: 1,
+        }
+    }
+}
+
+/// What a writer needs to know about the sequence besides its records.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct SequenceMeta {
+    /// Frame width (COCO and CVAT need it).
+    #[tsify(optional)]
+    pub width: Option<u32>,
+    /// Frame height (COCO and CVAT need it).
+    #[tsify(optional)]
+    pub height: Option<u32>,
+    /// Number of frames (default: the last record's frame).
+    #[tsify(optional)]
+    pub frames: Option<u32>,
+    /// Sequence name (CVAT task name, COCO file name stem).
+    #[tsify(optional)]
+    pub name: Option<String>,
+    /// Class names; classes without one are named "object" (-1) or "class N".
+    #[tsify(optional)]
+    pub labels: Option<Vec<LabelJs>>,
 }
 
 /// Parses an annotation or result file. `name` names the file in error messages.
-#[wasm_bindgen(js_name = parseRecords)]
-pub fn parse_records(format: Ts<Format>, text: &str, name: &str) -> Result<Ts<Records>, JsValue> {
-    let records = match rust(format)? {
-        Format::Mot => io::motchallenge::parse_mot(text, name),
-        Format::Mots => io::motchallenge::parse_mots(text, name),
-    }
-    .map_err(js_error)?;
-    ts(&from_core_records(&records))
+#[wasm_bindgen(js_name = parseAnnotations)]
+pub fn parse_annotations(
+    format: Ts<Format>,
+    text: &str,
+    name: &str,
+) -> Result<Ts<Annotations>, JsValue> {
+    let out = match rust(format)? {
+        Format::Mot => Annotations::plain(&motchallenge::parse_mot(text, name).map_err(js_error)?),
+        Format::Mots => {
+            Annotations::plain(&motchallenge::parse_mots(text, name).map_err(js_error)?)
+        }
+        Format::CocoVideo if text.trim_start().starts_with('[') => {
+            // The results form: a list of tracks; no video sizes.
+            let per_video =
+                coco_video::parse_coco_video_results(text, name, &[]).map_err(js_error)?;
+            let videos = per_video.len() as u32;
+            let records = per_video.into_values().next().unwrap_or_default();
+            Annotations {
+                videos,
+                ..Annotations::plain(&records)
+            }
+        }
+        Format::CocoVideo => {
+            let data = coco_video::parse_coco_video(text, name).map_err(js_error)?;
+            let labels = data
+                .categories
+                .iter()
+                .map(|c| LabelJs {
+                    class: c.id,
+                    name: c.name.clone(),
+                })
+                .collect();
+            let videos = data.videos.len() as u32;
+            match data.videos.into_iter().next() {
+                Some(v) => Annotations {
+                    records: from_core_records(&v.records),
+                    width: Some(v.video.width),
+                    height: Some(v.video.height),
+                    frames: Some(v.video.length),
+                    labels,
+                    videos,
+                },
+                None => Annotations {
+                    labels,
+                    videos,
+                    ..Annotations::plain(&[])
+                },
+            }
+        }
+        Format::Cvat => {
+            let a = cvat::parse_cvat(text, name, None).map_err(js_error)?;
+            let nonzero = |v: u32| (v > 0).then_some(v);
+            Annotations {
+                records: from_core_records(&a.records),
+                width: nonzero(a.meta.width),
+                height: nonzero(a.meta.height),
+                frames: nonzero(a.meta.size),
+                labels: a
+                    .labels
+                    .iter()
+                    .enumerate()
+                    .map(|(i, n)| LabelJs {
+                        class: i as i32,
+                        name: n.clone(),
+                    })
+                    .collect(),
+                videos: 1,
+            }
+        }
+    };
+    ts(&out)
 }
 
-/// Writes records in `format`. MOTS skips records without a mask, as the format requires.
-#[wasm_bindgen(js_name = writeRecords)]
-pub fn write_records(format: Ts<Format>, records: Ts<Records>) -> Result<String, JsValue> {
+/// Class names for every class the records use: the given ones, else "object" for -1 and
+/// "class N" for the others (COCO and CVAT need a name per class).
+fn label_map(records: &[Record], given: &[LabelJs]) -> BTreeMap<i32, String> {
+    let mut map: BTreeMap<i32, String> = given.iter().map(|l| (l.class, l.name.clone())).collect();
+    for r in records {
+        map.entry(r.class).or_insert_with(|| {
+            if r.class == -1 {
+                "object".to_string()
+            } else {
+                format!("class {}", r.class)
+            }
+        });
+    }
+    map
+}
+
+/// Writes records in `format`. MOTS skips records without a mask, as the format requires;
+/// COCO-video and CVAT need the frame size in `meta`.
+#[wasm_bindgen(js_name = writeAnnotations)]
+pub fn write_annotations(
+    format: Ts<Format>,
+    records: Ts<Records>,
+    meta: Option<Ts<SequenceMeta>>,
+) -> Result<String, JsValue> {
     let records = to_core_records(rust(records)?)?;
-    Ok(match rust(format)? {
-        Format::Mot => io::motchallenge::write_mot(&records),
-        Format::Mots => io::motchallenge::write_mots(&records),
-    })
+    let meta = match meta {
+        Some(m) => settings(m)?,
+        None => SequenceMeta::default(),
+    };
+    let frames = meta
+        .frames
+        .unwrap_or_else(|| records.iter().map(|r| r.frame).max().unwrap_or(0));
+    let size = || -> Result<(u32, u32), JsValue> {
+        match (meta.width, meta.height) {
+            (Some(w), Some(h)) if w > 0 && h > 0 => Ok((w, h)),
+            _ => Err(js_error(BindingError::Option {
+                name: "meta",
+                message: "this format needs the frame width and height".to_string(),
+            })),
+        }
+    };
+    let labels = label_map(&records, meta.labels.as_deref().unwrap_or(&[]));
+    match rust(format)? {
+        Format::Mot => Ok(motchallenge::write_mot(&records)),
+        Format::Mots => Ok(motchallenge::write_mots(&records)),
+        Format::CocoVideo => {
+            let (width, height) = size()?;
+            let video = coco_video::VideoInfo {
+                id: 1,
+                width,
+                height,
+                length: frames,
+                file_names: Vec::new(),
+            };
+            let categories: Vec<coco_video::Category> = labels
+                .iter()
+                .map(|(&id, name)| coco_video::Category {
+                    id,
+                    name: name.clone(),
+                })
+                .collect();
+            coco_video::write_coco_video(&[(video, &records)], &categories).map_err(js_error)
+        }
+        Format::Cvat => {
+            let (width, height) = size()?;
+            let meta = cvat::CvatMeta {
+                name: meta.name.clone().unwrap_or_else(|| "shapetrack".to_string()),
+                size: frames,
+                width,
+                height,
+            };
+            cvat::write_cvat(&records, &meta, &labels).map_err(js_error)
+        }
+    }
 }
 
 /// A mask cropped to its foreground: `data` holds `width·height` bytes (0/1), row-major, for
