@@ -17,10 +17,10 @@ use crate::detect::{
 use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Summary};
 use crate::frame::{BBox, Detection, Frame, FrameError, Mask, Point, TrackState, TrackedShape};
 use crate::io::{coco_video, cvat, motchallenge, Record, RecordFlags, Rle};
-use std::collections::BTreeMap;
 use crate::synth::{Scene, SynthConfig};
 use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use tsify::{Ts, Tsify};
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -582,7 +582,10 @@ pub fn write_annotations(
         Format::Cvat => {
             let (width, height) = size()?;
             let meta = cvat::CvatMeta {
-                name: meta.name.clone().unwrap_or_else(|| "shapetrack".to_string()),
+                name: meta
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| "shapetrack".to_string()),
                 size: frames,
                 width,
                 height,
@@ -1035,6 +1038,10 @@ pub struct TermsOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub iou: Option<TermOptions>,
+    /// Box IoU with the track's last observed box (finds a lost track where it was last seen).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub last_iou: Option<TermOptions>,
     /// Generalised IoU.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1104,6 +1111,10 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub new_track_score: Option<f64>,
+    /// An unmatched detection overlapping a matched one by more than this IoU starts no track.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub spawn_max_iou: Option<f64>,
     /// Matches a tentative track needs to be confirmed.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1151,6 +1162,10 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub lost_velocity_decay: Option<f64>,
+    /// Re-run a re-found lost track's filter along the gap (OC-SORT's re-update).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub reupdate_after_gap: Option<bool>,
     /// Match lost tracks after the tracks seen in the previous frame.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]

@@ -34,6 +34,26 @@ fn records_of(v: Ts<Records>) -> Vec<RecordJs> {
     serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
 }
 
+/// Parses `text` as `format` and returns the records as plain structs.
+fn parse(format: &str, text: &str, name: &str) -> Result<Vec<RecordJs>, JsValue> {
+    let a = parse_annotations(ts(JsValue::from_str(format)), text, name)?;
+    let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
+    Ok(serde_json::from_value(v["records"].clone()).unwrap())
+}
+
+/// Writes records as `format` with optional sequence info.
+fn write<T: Serialize>(
+    format: &str,
+    records: &T,
+    meta: Option<serde_json::Value>,
+) -> Result<String, JsValue> {
+    write_annotations(
+        ts(JsValue::from_str(format)),
+        ts(js(records)),
+        meta.map(|m| ts(js(&m))),
+    )
+}
+
 const MOT: &str =
     "1,1,10,20,30,40,1,-1,-1,-1\n1,2,100,20,30,40,0.5,-1,-1,-1\n2,1,12,21,30,40,1,-1,-1,-1\n";
 
@@ -62,14 +82,13 @@ fn frame_buffer_rejects_bad_sizes_with_an_error() {
 
 #[wasm_bindgen_test]
 fn mot_text_round_trips_through_records() {
-    let recs = parse_records(ts(JsValue::from_str("mot")), MOT, "a.txt").unwrap();
-    let v = records_of(recs);
+    let v = parse("mot", MOT, "a.txt").unwrap();
     assert_eq!(v.len(), 3);
     assert_eq!(
         (v[1].frame, v[1].id, v[1].bbox.x, v[1].score),
         (1, 2, 100.0, 0.5)
     );
-    let text = write_records(ts(JsValue::from_str("mot")), ts(js(&v))).unwrap();
+    let text = write("mot", &v, None).unwrap();
     assert_eq!(text, MOT);
 }
 
@@ -77,20 +96,16 @@ fn mot_text_round_trips_through_records() {
 fn records_from_js_take_defaults_for_missing_fields() {
     let row =
         serde_json::json!([{ "frame": 3, "id": 7, "bbox": { "x": 1, "y": 2, "w": 3, "h": 4 } }]);
-    let text = write_records(ts(JsValue::from_str("mot")), ts(js(&row))).unwrap();
+    let text = write("mot", &row, None).unwrap();
     assert_eq!(text, "3,7,1,2,3,4,1,-1,-1,-1\n");
 }
 
 #[wasm_bindgen_test]
 fn parse_errors_name_file_line_and_column() {
     let msg = error_message(
-        parse_records(
-            ts(JsValue::from_str("mot")),
-            "1,1,10,20,30,40\n2,x,1,1,1,1\n",
-            "gt.txt",
-        )
-        .err()
-        .unwrap(),
+        parse("mot", "1,1,10,20,30,40\n2,x,1,1,1,1\n", "gt.txt")
+            .err()
+            .unwrap(),
     );
     assert!(msg.starts_with("gt.txt:2:2:"), "{msg}");
 }
@@ -98,25 +113,21 @@ fn parse_errors_name_file_line_and_column() {
 #[wasm_bindgen_test]
 fn bad_js_values_are_errors_not_traps() {
     let msg = error_message(
-        write_records(ts(JsValue::from_str("mot")), ts(JsValue::from_f64(3.0)))
-            .err()
-            .unwrap(),
+        write_annotations(
+            ts(JsValue::from_str("mot")),
+            ts(JsValue::from_f64(3.0)),
+            None,
+        )
+        .err()
+        .unwrap(),
     );
     assert!(msg.contains("Records"), "{msg}");
-    let msg = error_message(
-        parse_records(ts(JsValue::from_str("yaml")), "", "x")
-            .err()
-            .unwrap(),
-    );
+    let msg = error_message(parse("yaml", "", "x").err().unwrap());
     assert!(msg.contains("yaml"), "{msg}");
     // A negative box size is a core FrameError, surfaced with its message.
     let row =
         serde_json::json!([{ "frame": 1, "id": 1, "bbox": { "x": 0, "y": 0, "w": -3, "h": 4 } }]);
-    let msg = error_message(
-        write_records(ts(JsValue::from_str("mot")), ts(js(&row)))
-            .err()
-            .unwrap(),
-    );
+    let msg = error_message(write("mot", &row, None).err().unwrap());
     assert!(msg.contains("negative size"), "{msg}");
 }
 
@@ -159,15 +170,77 @@ fn mots_text_round_trips_byte_exact() {
     let rle: RleJs =
         serde_wasm_bindgen::from_value(JsValue::from(encode_mask(w, h, &full).unwrap())).unwrap();
     let line = format!("1 5 2 {h} {w} {}\n", rle.counts);
-    let recs = parse_records(ts(JsValue::from_str("mots")), &line, "m.txt").unwrap();
-    let v = records_of(recs.clone());
+    let v = parse("mots", &line, "m.txt").unwrap();
     // The box is derived from the mask: columns 1..=6, rows 1..=3.
     assert_eq!(
         (v[0].bbox.x, v[0].bbox.y, v[0].bbox.w, v[0].bbox.h),
         (1.0, 1.0, 6.0, 3.0)
     );
-    let text = write_records(ts(JsValue::from_str("mots")), ts(JsValue::from(recs))).unwrap();
+    let text = write("mots", &v, None).unwrap();
     assert_eq!(text, line);
+}
+
+/// Two tracks with masks in an 8×6 image over frames 1–3.
+fn masked_records() -> Vec<RecordJs> {
+    let (w, h) = (8u32, 6u32);
+    let mut out = Vec::new();
+    for f in 1..=3u32 {
+        for (id, x0) in [(1i64, f as usize - 1), (2, 5)] {
+            let mut full = vec![0u8; (w * h) as usize];
+            for y in 1..3 {
+                full[y * w as usize + x0] = 1;
+                full[y * w as usize + x0 + 1] = 1;
+            }
+            let rle: RleJs =
+                serde_wasm_bindgen::from_value(JsValue::from(encode_mask(w, h, &full).unwrap()))
+                    .unwrap();
+            let row = serde_json::json!({
+                "frame": f, "id": id, "class": 1,
+                "bbox": { "x": x0, "y": 1, "w": 2, "h": 2 }, "mask": rle,
+            });
+            out.push(serde_json::from_value(row).unwrap());
+        }
+    }
+    out
+}
+
+#[wasm_bindgen_test]
+fn coco_video_and_cvat_round_trip_through_the_core() {
+    let recs = masked_records();
+    let meta = serde_json::json!({ "width": 8, "height": 6, "frames": 3, "name": "t",
+        "labels": [{ "class": 1, "name": "car" }] });
+    for format in ["coco-video", "cvat"] {
+        let text = write(format, &recs, Some(meta.clone())).unwrap();
+        let a = parse_annotations(ts(JsValue::from_str(format)), &text, "x").unwrap();
+        let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
+        assert_eq!(
+            (v["width"].clone(), v["height"].clone()),
+            (8.into(), 6.into()),
+            "{format}"
+        );
+        assert_eq!(v["frames"], 3, "{format}");
+        assert!(
+            v["labels"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|l| l["name"] == "car"),
+            "{format}: {v}"
+        );
+        let back: Vec<RecordJs> = serde_json::from_value(v["records"].clone()).unwrap();
+        assert_eq!(back.len(), recs.len(), "{format}");
+        for (a, b) in recs.iter().zip(&back) {
+            assert_eq!((a.frame, a.id, a.bbox), (b.frame, b.id, b.bbox), "{format}");
+            assert_eq!(
+                a.mask.as_ref().map(|m| &m.counts),
+                b.mask.as_ref().map(|m| &m.counts),
+                "{format}"
+            );
+        }
+    }
+    // Without the frame size these formats cannot be written.
+    let msg = error_message(write("cvat", &recs, None).err().unwrap());
+    assert!(msg.contains("width and height"), "{msg}");
 }
 
 // ---------------------------------------------------------------------------------------------

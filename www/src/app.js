@@ -505,12 +505,17 @@ export class App {
    * Reads an annotation file through the core.
    * @param {string} name
    * @param {string} text
-   * @returns {TrackRecord[]}
    */
   parse(name, text) {
     const format = guessFormat(name, text);
-    return /** @type {TrackRecord[]} */ (this.core.parseRecords(format, text, name));
+    const a = this.core.parseAnnotations(format, text, name);
+    if (a.videos > 1) this.status(`${name} holds ${a.videos} videos: reading the first`);
+    if (a.labels.length) this.labels = a.labels;
+    return a;
   }
+
+  /** @type {Array<{ class: number, name: string }>} class names from the last import */
+  labels = [];
 
   /**
    * Imports tracks to label (replaces the table; tracking stops). Without an open source the
@@ -519,14 +524,15 @@ export class App {
    * @param {string} text
    */
   async importTracks(name, text) {
-    const records = this.parse(name, text);
+    const parsed = this.parse(name, text);
+    const records = /** @type {TrackRecord[]} */ (parsed.records);
     await this.stop();
     this.tracking = false;
     this.model.replaceAll(records);
     if (!this.source) {
-      let w = 0;
-      let h = 0;
-      for (const r of records) {
+      let w = parsed.width ?? 0;
+      let h = parsed.height ?? 0;
+      for (const r of w && h ? [] : records) {
         if (r.mask) {
           h = r.mask.size[0];
           w = r.mask.size[1];
@@ -538,14 +544,14 @@ export class App {
       this.stage.resize(Math.max(1, Math.ceil(w)), Math.max(1, Math.ceil(h)));
       byId('empty').hidden = true;
     }
-    this.frames = Math.max(this.frames, this.model.table.lastFrame());
+    this.frames = Math.max(this.frames, parsed.frames ?? 0, this.model.table.lastFrame());
     this.status(`${name}: ${records.length} records, ${this.model.table.ids().length} tracks`);
     await this.seek(this.cur || 1);
   }
 
   /** @param {string} name @param {string} text */
   loadGroundTruth(name, text) {
-    this.gt = new TrackTable(this.parse(name, text));
+    this.gt = new TrackTable(/** @type {TrackRecord[]} */ (this.parse(name, text).records));
     this.gtName = `file ${name}`;
     this.options.gt = true;
     byId('opt-gt', HTMLInputElement).checked = true;
@@ -559,7 +565,13 @@ export class App {
    * @param {FormatId} format
    */
   exportText(format) {
-    return this.core.writeRecords(format, this.model.table.all());
+    return this.core.writeAnnotations(format, this.model.table.all(), {
+      width: this.stage.width,
+      height: this.stage.height,
+      frames: this.lastFrame,
+      name: this.source?.name ?? 'shapetrack',
+      labels: this.labels,
+    });
   }
 
   /** @param {FormatId} format */

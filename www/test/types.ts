@@ -4,17 +4,26 @@
 // would fail.
 
 import init, {
+  BackgroundDetector,
+  Detections,
   FrameBuffer,
+  SynthScene,
+  Tracker,
+  evaluate,
   decodeMask,
   encodeMask,
-  parseRecords,
+  parseAnnotations,
   version,
-  writeRecords,
+  writeAnnotations,
+  type Annotations,
   type Format,
   type MaskBitmap,
   type RecordJs,
   type Records,
   type RleJs,
+  type Scores,
+  type ShapeJs,
+  type Shapes,
 } from '../pkg/shapetrack.js';
 
 export async function usage(): Promise<string> {
@@ -25,25 +34,51 @@ export async function usage(): Promise<string> {
   const size: [number, number] = [buf.width, buf.height];
 
   const fmt: Format = 'mot';
-  const recs: Records = parseRecords(fmt, '1,1,0,0,1,1\n', 'x.txt');
+  const parsed: Annotations = parseAnnotations(fmt, '1,1,0,0,1,1\n', 'x.txt');
+  const recs: Records = parsed.records;
+  const width: number | undefined = parsed.width;
   const first: RecordJs | undefined = recs[0];
   const id: number = first?.id ?? -1;
   const mask: RleJs | undefined = first?.mask;
-  const text: string = writeRecords('mots', recs);
+  const text: string = writeAnnotations('cvat', recs, { width: 640, height: 480, labels: [{ class: -1, name: 'object' }] });
 
   const rle: RleJs = encodeMask(4, 4, new Uint8Array(16));
   const bm: MaskBitmap = decodeMask(rle);
   const data: Uint8Array = bm.data;
 
   // @ts-expect-error: formats are a closed set
-  parseRecords('yaml', '', '');
+  parseAnnotations('yaml', '', '');
   // @ts-expect-error: a record needs a box
-  writeRecords('mot', [{ frame: 1, id: 1 }]);
+  writeAnnotations('mot', [{ frame: 1, id: 1 }]);
+  // @ts-expect-error: sequence info has no such field
+  writeAnnotations('mot', [], { fps: 25 });
   // @ts-expect-error: RLE size is [height, width]
   decodeMask({ size: [1], counts: '' });
   // @ts-expect-error: mask bitmaps are Uint8Array, not number[]
   const wrong: number[] = bm.data;
 
+  // The demo pipeline: scene → detector → tracker → scores.
+  const scene = new SynthScene('demo');
+  const frameBuf = new FrameBuffer(scene.width, scene.height);
+  const tracker = new Tracker({ max_lost: 60, terms: { iou: { weight: 1, gate: null } } });
+  const bg = new BackgroundDetector({ threshold: 25, connectivity: 8 });
+  const sf = scene.render(1, frameBuf);
+  const dets: Detections = bg.detect(frameBuf);
+  const n: number = dets.len + sf.detections().len;
+  const shapes: Shapes = tracker.update(1, frameBuf, dets);
+  const s0: ShapeJs | undefined = shapes[0];
+  const state: 'tentative' | 'confirmed' | 'lost' | 'removed' | undefined = s0?.state;
+  const own = Detections.fromLists({ boxes: [{ bbox: { x: 0, y: 0, w: 4, h: 4 }, score: 0.9 }] });
+  tracker.updateDetections(2, own);
+  const scores: Scores = evaluate(sf.groundTruth(), tracker.tracks(), 2, { similarity: 'mask' });
+  const hota: number = scores.hota;
+  // @ts-expect-error: unknown tracker options are type errors (and runtime errors)
+  new Tracker({ max_lots: 3 });
+  // @ts-expect-error: scene presets are a closed set
+  new SynthScene('forest');
+  // @ts-expect-error: connectivity is 4 or 8
+  new BackgroundDetector({ connectivity: 6 });
+
   buf.free();
-  return `${version()} ${size} ${id} ${mask?.counts} ${text} ${data.length} ${wrong}`;
+  return `${n} ${state} ${hota} ` + `${version()} ${size} ${width} ${id} ${mask?.counts} ${text} ${data.length} ${wrong}`;
 }

@@ -2,7 +2,7 @@
 // done by the Rust core (parseRecords / writeRecords): this module only picks the format.
 
 /**
- * @typedef {'mot' | 'mots'} FormatId  the formats the core reads and writes
+ * @typedef {import('../../pkg/shapetrack.js').Format} FormatId  the formats the core reads and writes
  * @typedef {{ id: FormatId, label: string, ext: string, masks: boolean }} FormatInfo
  */
 
@@ -10,6 +10,8 @@
 export const FORMATS = [
   { id: 'mot', label: 'MOT txt', ext: 'txt', masks: false },
   { id: 'mots', label: 'MOTS txt', ext: 'txt', masks: true },
+  { id: 'coco-video', label: 'COCO-video JSON', ext: 'json', masks: true },
+  { id: 'cvat', label: 'CVAT video XML', ext: 'xml', masks: true },
 ];
 
 /** @param {string} id @returns {FormatInfo} */
@@ -27,9 +29,9 @@ export function formatInfo(id) {
  */
 export function guessFormat(name, text) {
   const lower = name.toLowerCase();
-  if (lower.endsWith('.json') || lower.endsWith('.xml')) {
-    throw new Error(`${name}: this build reads MOTChallenge and MOTS text files only`);
-  }
+  const head = text.trimStart().slice(0, 1);
+  if (lower.endsWith('.json') || head === '{' || head === '[') return 'coco-video';
+  if (lower.endsWith('.xml') || head === '<') return 'cvat';
   const first = text.split(/\r?\n/).find((l) => l.trim() !== '') ?? '';
   // MOTS: "frame id class height width rle", space-separated, the last field an RLE string
   // (characters 48..111, so never a comma) that is not a plain number.
