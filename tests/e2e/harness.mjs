@@ -77,8 +77,9 @@ export function isLocal(url) {
 /**
  * Launches Debian's Chromium headless with a throwaway profile. Every request of every page
  * and worker is recorded in `requests`; `foreign` lists those that left localhost.
+ * @param {{ args?: string[] }} [opts] extra Chromium flags (e.g. a fake webcam)
  */
-export async function launch() {
+export async function launch({ args = [] } = {}) {
   if (!existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} is missing: run node scripts/setup.mjs --e2e`);
   const profile = mkdtempSync(join(tmpdir(), 'shapetrack-e2e-'));
   const context = await chromium.launchPersistentContext(profile, {
@@ -95,6 +96,7 @@ export async function launch() {
       '--disable-sync',
       // A safety net under the assertion: names other than localhost do not resolve.
       '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE localhost, EXCLUDE 127.0.0.1',
+      ...args,
     ],
     viewport: { width: 1600, height: 1000 },
     acceptDownloads: true,

@@ -121,9 +121,9 @@ async function open(req) {
     height = req.source.height;
   }
   const buffer = new core.FrameBuffer(width, height);
-  const tracker = new core.Tracker(req.tracker ?? {});
   const detector = createDetector(req.detector, req.detectorOptions);
   await detector.init({ core, width, height });
+  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker });
   session = { core, memory, width, height, buffer, tracker, detector, scene, canvas: null, ctx2d: null };
   return { width, height, frames, fps, hasGroundTruth: scene !== null, version: core.version() };
 }
