@@ -1,1 +1,77 @@
-//! track (work in progress).
+//! The online tracker (thesis ch. 2.1, 3.3, 4.5): a phased update over a per-track Kalman
+//! filter, region estimation, pair-cost terms and optimal assignment; and the track lifecycle.
+//!
+//! - [`config`]: [`Config`], one documented set of parameters for every sequence.
+//! - [`cost`]: the [`PairCost`] trait, the built-in geometric/motion terms and their weighted,
+//!   renormalised combination (thesis eq. 39 generalised).
+//! - [`regions`]: [`estimate_regions`], which pairs are worth scoring at all (thesis Alg. 2).
+//! - [`online`]: [`Tracker`] and its `update` phases.
+//! - [`sequence`]: whole-sequence helpers (records in, records out).
+//!
+//! A track's lifecycle: **tentative** (born from an unmatched confident detection) →
+//! **confirmed** after [`Config::min_hits`] matches → **lost** when a frame passes without a
+//! match (kept and searchable for [`Config::max_lost`] frames; a match re-identifies it under
+//! the same id) → **removed**. Ids are handed out by each [`Tracker`] when a track is
+//! confirmed, so they are dense, start at 1, and two trackers never share a counter.
+
+pub mod config;
+pub mod cost;
+mod lifecycle;
+pub mod online;
+pub mod regions;
+pub mod sequence;
+
+pub use config::{Config, TermConfig, Terms};
+pub use cost::{
+    Candidate, CentreDistanceCost, CostModel, GiouCost, IouCost, LastIouCost, MahalanobisCost,
+    MaskIouCost, PairCost, SizeCost, WeightedTerm,
+};
+pub use lifecycle::Track;
+pub use online::{BoxFeatures, FeatureExtractor, Features, Tracker};
+pub use regions::{estimate_regions, Cluster, Regions};
+pub use sequence::{detections_by_frame, to_records, track_sequence};
+
+use crate::assign::AssignError;
+use crate::motion::MotionError;
+use thiserror::Error;
+
+/// Errors raised by the tracker.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum TrackError {
+    /// A detection has a NaN or infinite value, or a negative size.
+    #[error("detection {index}: {field} is {value}, expected {expected}")]
+    InvalidDetection {
+        /// Index of the detection in the frame's input.
+        index: usize,
+        /// Which field.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// What was expected.
+        expected: &'static str,
+    },
+    /// A configuration value is out of range.
+    #[error("config: {field} = {value}: {reason}")]
+    InvalidConfig {
+        /// Which field (dotted path, e.g. `terms.iou.weight`).
+        field: String,
+        /// The value given.
+        value: f64,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// A feature extractor failed on a detection.
+    #[error("detection {index}: feature extraction failed: {message}")]
+    Features {
+        /// Index of the detection in the frame's input.
+        index: usize,
+        /// What went wrong.
+        message: String,
+    },
+    /// A motion filter rejected its input.
+    #[error("motion filter: {0}")]
+    Motion(#[from] MotionError),
+    /// The assignment failed.
+    #[error("assignment: {0}")]
+    Assign(#[from] AssignError),
+}

@@ -1,0 +1,84 @@
+//! Box-mode tracking speed (frames per second, single thread): MOT15-train sequences from
+//! their `det/det.txt`, and synthetic scenes with 50 and 200 moving boxes per frame.
+//!
+//! `cargo bench --bench track` (criterion reports `elem/s` = frames per second).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use shapetrack::frame::{BBox, Detection};
+use shapetrack::io::motchallenge::{parse_mot, SeqInfo};
+use shapetrack::io::read_text;
+use shapetrack::track::{detections_by_frame, track_sequence, Config};
+use std::hint::black_box;
+use std::path::PathBuf;
+
+const SEQUENCES: [&str; 4] = ["ETH-Bahnhof", "PETS09-S2L1", "TUD-Stadtmitte", "Venice-2"];
+
+fn mot15(seq: &str) -> Vec<Vec<Detection>> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/mot15-train")
+        .join(seq);
+    let info = SeqInfo::read(&dir.join("seqinfo.ini")).expect("seqinfo.ini");
+    let path = dir.join("det/det.txt");
+    let recs = parse_mot(&read_text(&path).expect("det.txt"), "det.txt").expect("parse");
+    detections_by_frame(&recs, 1, info.seq_length)
+}
+
+/// `n` boxes wandering in a 1920×1080 frame with constant velocity plus jitter; each detection
+/// is missed with probability 5 %.
+fn random_scene(n: usize, frames: usize, seed: u64) -> Vec<Vec<Detection>> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut objs: Vec<[f64; 6]> = (0..n)
+        .map(|_| {
+            let w = rng.gen_range(20.0..80.0);
+            [
+                rng.gen_range(0.0..1900.0),
+                rng.gen_range(0.0..1000.0),
+                rng.gen_range(-4.0..4.0),
+                rng.gen_range(-2.0..2.0),
+                w,
+                w * rng.gen_range(1.5..3.0),
+            ]
+        })
+        .collect();
+    (0..frames)
+        .map(|_| {
+            let mut dets = Vec::with_capacity(n);
+            for o in &mut objs {
+                o[0] = (o[0] + o[2]).rem_euclid(1900.0);
+                o[1] = (o[1] + o[3]).rem_euclid(1000.0);
+                if rng.gen_bool(0.05) {
+                    continue;
+                }
+                let j = |r: &mut Xoshiro256PlusPlus| r.gen_range(-1.5..1.5);
+                let b = BBox::new(o[0] + j(&mut rng), o[1] + j(&mut rng), o[4], o[5]);
+                dets.push(Detection::from_box(b, rng.gen_range(0.5..1.0)));
+            }
+            dets
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let mut g = c.benchmark_group("track_box_mode");
+    g.sample_size(20);
+    for seq in SEQUENCES {
+        let frames = mot15(seq);
+        g.throughput(Throughput::Elements(frames.len() as u64));
+        g.bench_with_input(BenchmarkId::new("mot15", seq), &frames, |b, f| {
+            b.iter(|| black_box(track_sequence(Config::default(), f).expect("track")))
+        });
+    }
+    for n in [50usize, 200] {
+        let frames = random_scene(n, 100, 7 + n as u64);
+        g.throughput(Throughput::Elements(frames.len() as u64));
+        g.bench_with_input(BenchmarkId::new("random_boxes", n), &frames, |b, f| {
+            b.iter(|| black_box(track_sequence(Config::default(), f).expect("track")))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

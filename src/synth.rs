@@ -1,1 +1,0 @@
-//! synth (work in progress).

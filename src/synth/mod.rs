@@ -1,0 +1,1329 @@
+//! Deterministic synthetic scenes with exact ground truth and noisy detections.
+//!
+//! A [`Scene`] renders textured shapes (discs, ellipses, rectangles, triangles, stars, Ls,
+//! irregular polygons) moving over a static textured background, behind static occluding bars,
+//! and reports per frame the RGB image, the ground-truth instance masks of the **visible** pixels,
+//! and the detections a noisy detector would give ([`NoiseConfig`]).
+//!
+//! # Determinism
+//! Everything is a function of [`SynthConfig`] (including its `seed`): the same config gives
+//! byte-identical images, ground truth and detections on every run and every target, native or
+//! wasm32. Randomness comes from `rand_xoshiro` streams, one per purpose (layout, objects,
+//! per-frame detection noise, sensor noise), so the detection noise settings never change the
+//! images. Only IEEE-exact float operations are used; sines and cosines come from
+//! `math::sin_cos`, not the platform's libm. No hash maps.
+//!
+//! # Geometry and drawing
+//! Each object is a polygon in object space, rotated by `angle`, scaled by `scale` and placed at
+//! its centre. A pixel belongs to an object when its centre is inside the transformed polygon
+//! (even–odd rule, half-open edges). Objects are drawn from far to near (ascending `z`, then id),
+//! so nearer objects hide farther ones; occluders are in front of every object. Ground-truth
+//! masks are the pixels each object finally owns; `visibility` is that count over the object's
+//! full silhouette (unclipped by the frame border and unoccluded). An object with no visible
+//! pixel has no ground truth in that frame. Textures live in object space, so they rotate and
+//! scale with the object; there is no anti-aliasing, so every ground-truth pixel has exactly a
+//! palette colour of its object (before illumination drift or sensor noise, when enabled).
+//!
+//! # Motion
+//! Random objects move with a velocity whose speed stays within `speed`, change it by a random
+//! acceleration redrawn every `accel_period` frames, rotate at a constant rate and breathe in
+//! scale within `scale_range`. At the frame border they follow [`BorderPolicy`]: bounce off it,
+//! wrap around (same id), or leave and be replaced by a fresh object (new id) entering through
+//! a border. Scripted objects ([`ScriptedShape`]) move at constant velocity and angular velocity
+//! from a given start, so tests can compute their trajectory exactly; they follow the border
+//! policy too but are never replaced.
+//!
+//! Frame `t` (1-based) shows the state after `t − 1` motion steps; a scripted object's centre in
+//! frame `t` is `center + (t − 1)·velocity`.
+
+mod background;
+mod math;
+mod noise;
+mod raster;
+mod shape;
+
+pub use shape::ShapeKind;
+
+use crate::frame::{BBox, Detection, Frame, FrameError, Mask, Point};
+use crate::io::{Record, RecordFlags, Rle};
+use math::{below, sin_cos, stream, uniform};
+use rand::Rng;
+use raster::Rasterizer;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Errors building a [`Scene`] from a [`SynthConfig`].
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SynthError {
+    /// The frame size is outside `16..=8192` on a side.
+    #[error("frame size {width}x{height} is outside 16..=8192 per side")]
+    InvalidSize {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+    },
+    /// A numeric setting is outside its allowed range (or not finite).
+    #[error("{field} = {value} is outside [{min}, {max}]")]
+    OutOfRange {
+        /// The setting, as its path in the config.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// Smallest allowed value.
+        min: f64,
+        /// Largest allowed value.
+        max: f64,
+    },
+    /// A `(low, high)` setting has `low > high`.
+    #[error("{field} = ({lo}, {hi}) is an empty range")]
+    EmptyRange {
+        /// The setting.
+        field: &'static str,
+        /// Low end given.
+        lo: f64,
+        /// High end given.
+        hi: f64,
+    },
+    /// The objects' textures would need more memory than the scene allows.
+    #[error("textures of {shapes} shapes up to radius {radius} need {bytes} bytes, at most {max}")]
+    TooLarge {
+        /// Objects alive at once (random plus scripted).
+        shapes: u64,
+        /// Largest object radius (times aspect for scripted shapes).
+        radius: f64,
+        /// Estimated texture bytes.
+        bytes: u64,
+        /// The limit.
+        max: u64,
+    },
+    /// More objects than a frame's id buffer can hold.
+    #[error("{shapes} shapes requested, at most {max} are supported")]
+    TooManyShapes {
+        /// Objects requested (random plus scripted).
+        shapes: u64,
+        /// The limit.
+        max: u64,
+    },
+}
+
+/// What happens when an object reaches the frame border.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BorderPolicy {
+    /// Reflect the velocity when the object's bounding circle touches the border: objects stay
+    /// fully inside the frame and keep their id for the whole sequence.
+    Bounce,
+    /// Objects leave through the border; once fully outside they are removed and (random ones)
+    /// replaced by a new object, with a new id, entering through a random border. Ids are never
+    /// reused.
+    Exit,
+    /// Objects leaving through one side come back through the opposite one, keeping their id
+    /// (they have no ground truth while fully outside).
+    Wrap,
+}
+
+/// How random objects look and move. Sizes are in pixels, rates per frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MotionConfig {
+    /// Range of the outline radius (half the largest extent) at scale 1. Default `(14, 40)`.
+    pub radius: (f64, f64),
+    /// Range of the speed, pixels per frame. Default `(1.5, 5.0)`.
+    pub speed: (f64, f64),
+    /// Largest acceleration magnitude, pixels per frame². Default `0.12`.
+    pub accel: f64,
+    /// Frames between two acceleration changes, drawn in this range. Default `(20, 60)`.
+    pub accel_period: (u32, u32),
+    /// Largest angular speed, radians per frame. Default `0.04`.
+    pub max_rotation: f64,
+    /// Largest relative scale change per frame. Default `0.003`.
+    pub max_scale_rate: f64,
+    /// Scale limits (must contain 1; objects start at scale 1). Default `(0.8, 1.25)`.
+    pub scale_range: (f64, f64),
+    /// When set, initial and entering directions lie within this many radians of horizontal
+    /// (left or right), which makes objects cross vertical occluders. Default `None` (any).
+    pub direction_spread: Option<f64>,
+    /// Border behaviour. Default [`BorderPolicy::Exit`].
+    pub border: BorderPolicy,
+}
+
+impl Default for MotionConfig {
+    fn default() -> Self {
+        Self {
+            radius: (14.0, 40.0),
+            speed: (1.5, 5.0),
+            accel: 0.12,
+            accel_period: (20, 60),
+            max_rotation: 0.04,
+            max_scale_rate: 0.003,
+            scale_range: (0.8, 1.25),
+            direction_spread: None,
+            border: BorderPolicy::Exit,
+        }
+    }
+}
+
+/// An axis-aligned occluder in whole pixels (drawn in front of every object).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OccluderRect {
+    /// Left column.
+    pub x: u32,
+    /// Top row.
+    pub y: u32,
+    /// Width in pixels.
+    pub w: u32,
+    /// Height in pixels.
+    pub h: u32,
+}
+
+impl OccluderRect {
+    /// The rectangle as a box.
+    pub fn bbox(&self) -> BBox {
+        BBox::new(self.x as f64, self.y as f64, self.w as f64, self.h as f64)
+    }
+}
+
+/// Static occluders: vertical bars plus explicit rectangles.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OcclusionConfig {
+    /// Number of full-height vertical bars, spread evenly with a seeded jitter. Default `1`.
+    pub bars: u32,
+    /// Bar width in pixels; `None` sizes bars so that an object of mean radius at mean speed,
+    /// crossing horizontally, is fully hidden for about `hidden_frames` frames:
+    /// `2·mean radius + hidden_frames·mean speed`. Default `None`.
+    pub bar_width: Option<u32>,
+    /// Target full-occlusion length used when `bar_width` is `None`. Default `10`.
+    pub hidden_frames: f64,
+    /// Extra occluders at fixed places. Default none.
+    pub rects: Vec<OccluderRect>,
+}
+
+impl Default for OcclusionConfig {
+    fn default() -> Self {
+        Self {
+            bars: 1,
+            bar_width: None,
+            hidden_frames: 10.0,
+            rects: Vec::new(),
+        }
+    }
+}
+
+/// Whole-image effects, and how far object colours keep from the background's grey level.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AppearanceConfig {
+    /// Amplitude of a slow global gain `1 + a·sin(2π(t−1)/period)`. Default `0` (off).
+    pub illumination_drift: f64,
+    /// Period of the illumination drift, in frames. Default `250`.
+    pub illumination_period: f64,
+    /// Uniform per-channel sensor noise amplitude, grey levels. Default `0` (off).
+    pub sensor_noise: u8,
+    /// Least luma difference between any object colour and the background's nominal grey.
+    /// Default `50`.
+    pub min_contrast: f64,
+}
+
+impl Default for AppearanceConfig {
+    fn default() -> Self {
+        Self {
+            illumination_drift: 0.0,
+            illumination_period: 250.0,
+            sensor_noise: 0,
+            min_contrast: 50.0,
+        }
+    }
+}
+
+/// The detection noise model (see the `noise` module docs for the exact process).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoiseConfig {
+    /// Probability that a visible object is not detected. Default `0.05`.
+    pub miss_rate: f64,
+    /// Mean number of false-positive blobs per frame (at most 16). Default `0.2`.
+    pub false_positives: f64,
+    /// Probability that a detected mask is eroded or dilated. Default `0.3`.
+    pub morph_prob: f64,
+    /// Largest erosion/dilation radius in pixels (1..=this, uniformly). Default `2`.
+    pub morph_max: u32,
+    /// Probability that a detected mask is split in two. Default `0.02`.
+    pub split_prob: f64,
+    /// Standard deviation of the box-only variant's jitter, relative to box size. Default `0.03`.
+    pub box_jitter: f64,
+    /// Objects (and split parts, false positives) with fewer visible pixels are never
+    /// detected. Default `16`.
+    pub min_area: u64,
+}
+
+impl Default for NoiseConfig {
+    fn default() -> Self {
+        Self {
+            miss_rate: 0.05,
+            false_positives: 0.2,
+            morph_prob: 0.3,
+            morph_max: 2,
+            split_prob: 0.02,
+            box_jitter: 0.03,
+            min_area: 16,
+        }
+    }
+}
+
+impl NoiseConfig {
+    /// A detector that sees every object exactly: no misses, no false positives, exact masks.
+    pub fn perfect() -> Self {
+        Self {
+            miss_rate: 0.0,
+            false_positives: 0.0,
+            morph_prob: 0.0,
+            morph_max: 0,
+            split_prob: 0.0,
+            box_jitter: 0.0,
+            min_area: 1,
+        }
+    }
+}
+
+/// An object with a fully specified, constant-velocity trajectory (for tests that need to know
+/// exactly where an object is).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScriptedShape {
+    /// Outline family.
+    pub kind: ShapeKind,
+    /// Outline radius (for rectangles, the half-width).
+    pub radius: f64,
+    /// Minor/major ratio for ellipses and rectangles (rectangle half-height = `radius·aspect`).
+    pub aspect: f64,
+    /// Centre in frame 1.
+    pub center: Point,
+    /// Displacement per frame.
+    pub velocity: Point,
+    /// Rotation in frame 1, radians.
+    pub angle: f64,
+    /// Rotation per frame, radians.
+    pub angular_velocity: f64,
+    /// Depth order: higher is nearer (random objects have `z` in `[0, 1)`).
+    pub z: f64,
+}
+
+impl ScriptedShape {
+    /// An axis-aligned, non-rotating rectangle of half-sizes `half_w × half_h` centred on
+    /// `center` in frame 1, moving by `velocity` per frame, drawn in front of random objects.
+    pub fn rectangle(center: Point, half_w: f64, half_h: f64, velocity: Point) -> Self {
+        Self {
+            kind: ShapeKind::Rectangle,
+            radius: half_w,
+            aspect: if half_w > 0.0 { half_h / half_w } else { 1.0 },
+            center,
+            velocity,
+            angle: 0.0,
+            angular_velocity: 0.0,
+            z: 1.0,
+        }
+    }
+}
+
+/// Everything that defines a synthetic sequence. `Default` gives a 640×480, 25 fps, 300-frame
+/// sequence of 10 shapes with one occluding bar and the default detection noise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SynthConfig {
+    /// Seed of every random choice. Default `0`.
+    pub seed: u64,
+    /// Number of frames. Default `300`.
+    pub frames: u32,
+    /// Number of random objects alive at once (with [`BorderPolicy::Exit`], replacements keep
+    /// the count). Default `10`.
+    pub shapes: u32,
+    /// Frame width in pixels. Default `640`.
+    pub width: u32,
+    /// Frame height in pixels. Default `480`.
+    pub height: u32,
+    /// Frame rate (only written to `seqinfo.ini`; motion is per frame). Default `25`.
+    pub fps: f64,
+    /// How random objects move.
+    pub motion: MotionConfig,
+    /// Static occluders.
+    pub occlusion: OcclusionConfig,
+    /// Whole-image effects.
+    pub appearance: AppearanceConfig,
+    /// Detection noise.
+    pub noise: NoiseConfig,
+    /// Objects with exact trajectories, added to the random ones. Default none.
+    pub scripted: Vec<ScriptedShape>,
+}
+
+impl Default for SynthConfig {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            frames: 300,
+            shapes: 10,
+            width: 640,
+            height: 480,
+            fps: 25.0,
+            motion: MotionConfig::default(),
+            occlusion: OcclusionConfig::default(),
+            appearance: AppearanceConfig::default(),
+            noise: NoiseConfig::default(),
+            scripted: Vec::new(),
+        }
+    }
+}
+
+impl SynthConfig {
+    /// The default scene with another seed.
+    pub fn with_seed(seed: u64) -> Self {
+        Self {
+            seed,
+            ..Self::default()
+        }
+    }
+
+    /// Crossings and occlusions: 8 shapes of radius 16–24 bounce around 640×480 moving within
+    /// 20° of horizontal at 3–5 px/frame, so they cross one another and two full-height bars
+    /// 80 px wide, sized to hide the mean object for 10 frames (seeds 1–3: 89 full occlusions
+    /// of 4–19 frames, median 11, and objects crossing in ~20% of frames); 5% misses and the
+    /// default noise otherwise. 300 frames.
+    pub fn occlusion_scene(seed: u64) -> Self {
+        Self {
+            seed,
+            shapes: 8,
+            motion: MotionConfig {
+                radius: (16.0, 24.0),
+                speed: (3.0, 5.0),
+                accel: 0.0,
+                max_rotation: 0.02,
+                max_scale_rate: 0.0,
+                scale_range: (1.0, 1.0),
+                direction_spread: Some(0.35),
+                border: BorderPolicy::Bounce,
+                ..MotionConfig::default()
+            },
+            occlusion: OcclusionConfig {
+                bars: 2,
+                bar_width: None,
+                hidden_frames: 10.0,
+                rects: Vec::new(),
+            },
+            ..Self::default()
+        }
+    }
+
+    /// The browser demo's default: 1280×720, 600 frames, 12 larger shapes entering and leaving,
+    /// two bars, a slight illumination drift and sensor noise. Seed 2024.
+    pub fn demo() -> Self {
+        Self {
+            seed: 2024,
+            frames: 600,
+            shapes: 12,
+            width: 1280,
+            height: 720,
+            motion: MotionConfig {
+                radius: (24.0, 64.0),
+                speed: (1.5, 6.0),
+                ..MotionConfig::default()
+            },
+            occlusion: OcclusionConfig {
+                bars: 2,
+                ..OcclusionConfig::default()
+            },
+            appearance: AppearanceConfig {
+                illumination_drift: 0.03,
+                sensor_noise: 2,
+                ..AppearanceConfig::default()
+            },
+            ..Self::default()
+        }
+    }
+
+    /// Checks every setting; [`Scene::new`] calls it.
+    pub fn validate(&self) -> Result<(), SynthError> {
+        fn range(field: &'static str, v: f64, min: f64, max: f64) -> Result<(), SynthError> {
+            if v.is_finite() && v >= min && v <= max {
+                Ok(())
+            } else {
+                Err(SynthError::OutOfRange {
+                    field,
+                    value: v,
+                    min,
+                    max,
+                })
+            }
+        }
+        fn pair(field: &'static str, p: (f64, f64), min: f64, max: f64) -> Result<(), SynthError> {
+            range(field, p.0, min, max)?;
+            range(field, p.1, min, max)?;
+            if p.0 > p.1 {
+                return Err(SynthError::EmptyRange {
+                    field,
+                    lo: p.0,
+                    hi: p.1,
+                });
+            }
+            Ok(())
+        }
+        if !(16..=8192).contains(&self.width) || !(16..=8192).contains(&self.height) {
+            return Err(SynthError::InvalidSize {
+                width: self.width,
+                height: self.height,
+            });
+        }
+        let total = self.shapes as u64 + self.scripted.len() as u64;
+        if total > MAX_SHAPES {
+            return Err(SynthError::TooManyShapes {
+                shapes: total,
+                max: MAX_SHAPES,
+            });
+        }
+        range("fps", self.fps, 1e-3, 1e4)?;
+        let m = &self.motion;
+        pair("motion.radius", m.radius, 2.0, 500.0)?;
+        pair("motion.speed", m.speed, 0.0, 1000.0)?;
+        range("motion.accel", m.accel, 0.0, 100.0)?;
+        let ap = (m.accel_period.0 as f64, m.accel_period.1 as f64);
+        pair("motion.accel_period", ap, 1.0, 1e6)?;
+        range("motion.max_rotation", m.max_rotation, 0.0, 3.2)?;
+        range("motion.max_scale_rate", m.max_scale_rate, 0.0, 0.5)?;
+        pair("motion.scale_range", m.scale_range, 0.1, 10.0)?;
+        range("motion.scale_range.0", m.scale_range.0, 0.1, 1.0)?;
+        range("motion.scale_range.1", m.scale_range.1, 1.0, 10.0)?;
+        if let Some(s) = m.direction_spread {
+            range("motion.direction_spread", s, 0.0, std::f64::consts::PI)?;
+        }
+        let o = &self.occlusion;
+        range("occlusion.bars", o.bars as f64, 0.0, 100.0)?;
+        range("occlusion.hidden_frames", o.hidden_frames, 0.0, 1e4)?;
+        let a = &self.appearance;
+        range(
+            "appearance.illumination_drift",
+            a.illumination_drift,
+            0.0,
+            0.5,
+        )?;
+        range(
+            "appearance.illumination_period",
+            a.illumination_period,
+            1.0,
+            1e9,
+        )?;
+        range("appearance.min_contrast", a.min_contrast, 0.0, 100.0)?;
+        let n = &self.noise;
+        range("noise.miss_rate", n.miss_rate, 0.0, 1.0)?;
+        range("noise.false_positives", n.false_positives, 0.0, 16.0)?;
+        range("noise.morph_prob", n.morph_prob, 0.0, 1.0)?;
+        range("noise.morph_max", n.morph_max as f64, 0.0, 10.0)?;
+        range("noise.split_prob", n.split_prob, 0.0, 1.0)?;
+        range("noise.box_jitter", n.box_jitter, 0.0, 1.0)?;
+        for s in &self.scripted {
+            range("scripted.radius", s.radius, 1.0, 1000.0)?;
+            range("scripted.aspect", s.aspect, 0.01, 10.0)?;
+            range("scripted.center.x", s.center.x, -1e6, 1e6)?;
+            range("scripted.center.y", s.center.y, -1e6, 1e6)?;
+            range("scripted.velocity.x", s.velocity.x, -1e4, 1e4)?;
+            range("scripted.velocity.y", s.velocity.y, -1e4, 1e4)?;
+            range("scripted.angle", s.angle, -1e6, 1e6)?;
+            range("scripted.angular_velocity", s.angular_velocity, -1e3, 1e3)?;
+            range("scripted.z", s.z, -1e9, 1e9)?;
+        }
+        // Textures live in object space at scale 1, about (2·bound)² texels of 3 bytes each;
+        // refuse configs whose live objects would need hundreds of megabytes (in wasm32 an
+        // allocation failure aborts the page).
+        let texture = |r: f64| {
+            let side = 2.0 * (r * std::f64::consts::SQRT_2 + 3.0);
+            (3.0 * side * side) as u64
+        };
+        let mut bytes = self.shapes as u64 * texture(m.radius.1);
+        let mut radius = m.radius.1;
+        for s in &self.scripted {
+            let r = s.radius * s.aspect.max(1.0);
+            radius = radius.max(r);
+            bytes += texture(r);
+        }
+        if bytes > MAX_TEXTURE_BYTES {
+            return Err(SynthError::TooLarge {
+                shapes: total,
+                radius,
+                bytes,
+                max: MAX_TEXTURE_BYTES,
+            });
+        }
+        Ok(())
+    }
+
+    /// The bar width the scene uses: `bar_width`, or the automatic size described there.
+    pub fn effective_bar_width(&self) -> u32 {
+        self.occlusion.bar_width.unwrap_or_else(|| {
+            let m = &self.motion;
+            let r = (m.radius.0 + m.radius.1) / 2.0;
+            let v = (m.speed.0 + m.speed.1) / 2.0;
+            (2.0 * r + self.occlusion.hidden_frames * v)
+                .round()
+                .max(1.0) as u32
+        })
+    }
+}
+
+/// Objects a frame can hold (the id buffer is 16-bit).
+const MAX_SHAPES: u64 = 10_000;
+/// Texture memory a scene may use.
+const MAX_TEXTURE_BYTES: u64 = 256 << 20;
+
+/// Purposes of the scene-wide random streams.
+const LAYOUT_STREAM: u64 = 0x6c61_796f;
+const OBJECT_STREAM: u64 = 0x6f62_6a73;
+const SENSOR_STREAM: u64 = 0x7365_6e73;
+
+/// One object's ground truth in one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GtObject {
+    /// Object id (1-based, never reused within a scene).
+    pub id: u64,
+    /// Outline family.
+    pub kind: ShapeKind,
+    /// Visible pixels (never empty; disjoint from every other object's in the frame).
+    pub mask: Mask,
+    /// Tight box of `mask`.
+    pub bbox: BBox,
+    /// Visible pixels over the full silhouette's pixels, in `(0, 1]`.
+    pub visibility: f64,
+    /// Pixels of the full silhouette (unclipped, unoccluded).
+    pub full_area: u64,
+    /// The colours the object's texture uses.
+    pub palette: Vec<[u8; 3]>,
+}
+
+/// One rendered frame with its ground truth and detections.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthFrame {
+    /// Frame number, 1-based.
+    pub index: u32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// RGB8 pixels, row-major, `3·width` bytes per row.
+    pub image: Vec<u8>,
+    /// Ground truth of the visible objects, by increasing id.
+    pub gt: Vec<GtObject>,
+    /// Noisy mask detections (each with its mask's tight box), object detections first (by id)
+    /// then false positives.
+    pub detections: Vec<Detection>,
+    /// For each detection, the id of the object it came from (`None` for false positives).
+    pub detection_sources: Vec<Option<u64>>,
+    /// Box-only variant of `detections` (same order, same scores): jittered boxes, no masks.
+    pub box_detections: Vec<Detection>,
+}
+
+impl SynthFrame {
+    /// A borrowed RGB view of the image.
+    pub fn frame(&self) -> Result<Frame<'_>, FrameError> {
+        Frame::rgb(&self.image, self.width, self.height)
+    }
+
+    /// Ground truth as records: class 1, score 1 ("consider"), visibility, mask as RLE.
+    pub fn gt_records(&self) -> Vec<Record> {
+        self.gt
+            .iter()
+            .map(|g| Record {
+                frame: self.index,
+                id: g.id as i64,
+                bbox: g.bbox,
+                score: 1.0,
+                class: 1,
+                visibility: g.visibility,
+                mask: Some(rle_of(&g.mask, self.width, self.height)),
+                flags: RecordFlags::default(),
+            })
+            .collect()
+    }
+
+    /// Mask detections as records: id -1, class -1, the detection's score, mask as RLE.
+    pub fn detection_records(&self) -> Vec<Record> {
+        self.detections
+            .iter()
+            .map(|d| Record {
+                frame: self.index,
+                id: -1,
+                bbox: d.bbox,
+                score: d.score,
+                class: -1,
+                visibility: -1.0,
+                mask: d.mask.as_ref().map(|m| rle_of(m, self.width, self.height)),
+                flags: RecordFlags::default(),
+            })
+            .collect()
+    }
+
+    /// Box-only detections as records: id -1, class -1, the score, no mask.
+    pub fn box_detection_records(&self) -> Vec<Record> {
+        self.box_detections
+            .iter()
+            .map(|d| Record {
+                frame: self.index,
+                id: -1,
+                bbox: d.bbox,
+                score: d.score,
+                class: -1,
+                visibility: -1.0,
+                mask: None,
+                flags: RecordFlags::default(),
+            })
+            .collect()
+    }
+}
+
+/// COCO RLE of a mask placed in a `w × h` image, touching only the mask's columns pixel by
+/// pixel (the generic [`Rle::from_mask`] visits every image pixel per mask).
+fn rle_of(m: &Mask, w: u32, h: u32) -> Rle {
+    let mut counts = Vec::new();
+    let (mut prev, mut run) = (false, 0u32);
+    let mut push = |v: bool, n: u32, prev: &mut bool, run: &mut u32| {
+        if n == 0 {
+            return;
+        }
+        if v != *prev {
+            counts.push(*run);
+            *run = 0;
+            *prev = v;
+        }
+        *run += n;
+    };
+    let (mx0, mx1) = (m.x(), m.x() + m.width() as i32);
+    let my0 = m.y().clamp(0, h as i32);
+    let my1 = (m.y() + m.height() as i32).clamp(0, h as i32);
+    for x in 0..w as i32 {
+        if x < mx0 || x >= mx1 || my1 <= my0 {
+            push(false, h, &mut prev, &mut run);
+            continue;
+        }
+        push(false, my0 as u32, &mut prev, &mut run);
+        for y in my0..my1 {
+            push(m.get(x, y), 1, &mut prev, &mut run);
+        }
+        push(false, h - my1 as u32, &mut prev, &mut run);
+    }
+    counts.push(run);
+    Rle {
+        height: h,
+        width: w,
+        counts,
+    }
+}
+
+/// One object's model and state.
+#[derive(Debug, Clone)]
+struct Object {
+    id: u64,
+    kind: ShapeKind,
+    poly: Vec<[f64; 2]>,
+    bound: f64,
+    texture: shape::Texture,
+    palette: Vec<[u8; 3]>,
+    pos: [f64; 2],
+    vel: [f64; 2],
+    acc: [f64; 2],
+    accel_timer: u32,
+    angle: f64,
+    omega: f64,
+    scale: f64,
+    dscale: f64,
+    z: f64,
+    scripted: bool,
+    entered: bool,
+    age: u32,
+    /// This frame: clipped rectangle `[x0, x1) × [y0, y1)` of the spans drawn, if any.
+    drawn: Option<[i32; 4]>,
+    /// This frame: full silhouette pixel count.
+    full_area: u64,
+}
+
+/// A synthetic sequence being generated frame by frame (also an [`Iterator`] of frames).
+#[derive(Debug, Clone)]
+pub struct Scene {
+    cfg: SynthConfig,
+    next_index: u32,
+    next_id: u64,
+    objects: Vec<Object>,
+    background: Vec<u8>,
+    occ: Vec<u8>,
+    occluders: Vec<OccluderRect>,
+    ids: Vec<u16>,
+    poly: Vec<[f64; 2]>,
+    order: Vec<usize>,
+    /// Scratch for the sensor noise bytes.
+    noise: Vec<u8>,
+    raster: Rasterizer,
+    rng: rand_xoshiro::Xoshiro256PlusPlus,
+}
+
+impl Scene {
+    /// Validates `cfg`, renders the background and occluders and places the initial objects.
+    pub fn new(cfg: SynthConfig) -> Result<Scene, SynthError> {
+        cfg.validate()?;
+        let (w, h) = (cfg.width, cfg.height);
+        let mut layout = stream(cfg.seed, LAYOUT_STREAM);
+        let mut background = background::render(&mut layout, w, h);
+        let occluders = background::occluders(
+            &mut layout,
+            w,
+            h,
+            cfg.occlusion.bars,
+            cfg.effective_bar_width(),
+            &cfg.occlusion.rects,
+        );
+        let mut occ = vec![0u8; w as usize * h as usize];
+        background::draw_occluders(&mut layout, &mut background, &mut occ, w, h, &occluders);
+        let mut scene = Scene {
+            next_index: 1,
+            next_id: 1,
+            objects: Vec::new(),
+            background,
+            occ,
+            occluders,
+            ids: vec![0; w as usize * h as usize],
+            poly: Vec::new(),
+            order: Vec::new(),
+            noise: Vec::new(),
+            raster: Rasterizer::default(),
+            rng: stream(cfg.seed, OBJECT_STREAM),
+            cfg,
+        };
+        for i in 0..scene.cfg.scripted.len() {
+            let s = scene.cfg.scripted[i].clone();
+            let o = scene.scripted_object(&s);
+            scene.objects.push(o);
+        }
+        for _ in 0..scene.cfg.shapes {
+            let o = scene.random_object(true);
+            scene.objects.push(o);
+        }
+        Ok(scene)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SynthConfig {
+        &self.cfg
+    }
+
+    /// The static background with the occluders drawn in (RGB8, no objects, no illumination
+    /// drift or sensor noise): what a perfect background model converges to.
+    pub fn background(&self) -> &[u8] {
+        &self.background
+    }
+
+    /// The static occluders (bars first, then the configured rectangles).
+    pub fn occluders(&self) -> &[OccluderRect] {
+        &self.occluders
+    }
+
+    /// The number of the next frame [`Scene::frame`] returns (1-based).
+    pub fn next_index(&self) -> u32 {
+        self.next_index
+    }
+
+    /// Renders the next frame and advances the motion; `None` after `frames` frames.
+    pub fn frame(&mut self) -> Option<SynthFrame> {
+        if self.next_index > self.cfg.frames {
+            return None;
+        }
+        let index = self.next_index;
+        let mut image = self.render();
+        let gt = self.ground_truth();
+        self.apply_appearance(index, &mut image);
+        let noisy = noise::detect(
+            &self.cfg.noise,
+            self.cfg.seed,
+            index,
+            &gt,
+            self.cfg.width,
+            self.cfg.height,
+            &mut self.raster,
+        );
+        self.step();
+        self.next_index += 1;
+        Some(SynthFrame {
+            index,
+            width: self.cfg.width,
+            height: self.cfg.height,
+            image,
+            gt,
+            detections: noisy.masks,
+            detection_sources: noisy.sources,
+            box_detections: noisy.boxes,
+        })
+    }
+
+    fn scripted_object(&mut self, s: &ScriptedShape) -> Object {
+        let poly = shape::outline(s.kind, s.radius, s.aspect, &mut self.rng);
+        self.make_object(
+            s.kind,
+            poly,
+            [s.center.x, s.center.y],
+            [s.velocity.x, s.velocity.y],
+            s.angle,
+            s.angular_velocity,
+            s.z,
+            true,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn make_object(
+        &mut self,
+        kind: ShapeKind,
+        poly: Vec<[f64; 2]>,
+        pos: [f64; 2],
+        vel: [f64; 2],
+        angle: f64,
+        omega: f64,
+        z: f64,
+        scripted: bool,
+    ) -> Object {
+        let bound = shape::bound(&poly);
+        let palette = shape::palette(
+            &mut self.rng,
+            background::BG_LUMA,
+            self.cfg.appearance.min_contrast,
+        );
+        let texture = shape::texture(&mut self.rng, bound, &palette);
+        let id = self.next_id;
+        self.next_id += 1;
+        let (w, h) = (self.cfg.width as f64, self.cfg.height as f64);
+        let entered = pos[0] + bound > 0.0
+            && pos[0] - bound < w
+            && pos[1] + bound > 0.0
+            && pos[1] - bound < h;
+        Object {
+            id,
+            kind,
+            poly,
+            bound,
+            texture,
+            palette,
+            pos,
+            vel,
+            acc: [0.0, 0.0],
+            accel_timer: 0,
+            angle,
+            omega,
+            scale: 1.0,
+            dscale: 0.0,
+            z,
+            scripted,
+            entered,
+            age: 0,
+            drawn: None,
+            full_area: 0,
+        }
+    }
+
+    /// A random object, placed inside the frame (`inside`) or just outside a border, heading in.
+    fn random_object(&mut self, inside: bool) -> Object {
+        let m = self.cfg.motion.clone();
+        let rng = &mut self.rng;
+        let kind = ShapeKind::ALL[below(rng, 0, ShapeKind::ALL.len() as u32) as usize];
+        let r = uniform(rng, m.radius.0, m.radius.1);
+        let aspect = uniform(rng, 0.45, 0.85);
+        let poly = shape::outline(kind, r, aspect, rng);
+        let reach = shape::bound(&poly) * m.scale_range.1;
+        let (w, h) = (self.cfg.width as f64, self.cfg.height as f64);
+        let speed = uniform(rng, m.speed.0, m.speed.1);
+        let spread = m.direction_spread.unwrap_or(std::f64::consts::PI);
+        let leftward = rng.gen::<u32>() & 1 == 1;
+        let mut dir = uniform(rng, -spread, spread);
+        let pos;
+        if inside {
+            let px = if w > 2.0 * reach {
+                uniform(rng, reach, w - reach)
+            } else {
+                w / 2.0
+            };
+            let py = if h > 2.0 * reach {
+                uniform(rng, reach, h - reach)
+            } else {
+                h / 2.0
+            };
+            if leftward {
+                dir += std::f64::consts::PI;
+            }
+            pos = [px, py];
+        } else {
+            // Enter through a side, heading inwards within ±60° (or the configured spread).
+            let sides = if m
+                .direction_spread
+                .is_some_and(|s| s < std::f64::consts::FRAC_PI_4)
+            {
+                2
+            } else {
+                4
+            };
+            let side = below(rng, 0, sides);
+            let spread = spread.min(1.05);
+            dir = uniform(rng, -spread, spread);
+            let along_x = uniform(rng, 0.0, w);
+            let along_y = uniform(rng, 0.0, h);
+            let out = reach + 1.0;
+            pos = match side {
+                0 => [-out, along_y],
+                1 => {
+                    dir += std::f64::consts::PI;
+                    [w + out, along_y]
+                }
+                2 => {
+                    dir += std::f64::consts::FRAC_PI_2;
+                    [along_x, -out]
+                }
+                _ => {
+                    dir -= std::f64::consts::FRAC_PI_2;
+                    [along_x, h + out]
+                }
+            };
+        }
+        let (s, c) = sin_cos(dir);
+        let angle = uniform(rng, 0.0, std::f64::consts::TAU);
+        let omega = uniform(rng, -m.max_rotation, m.max_rotation);
+        let dscale = uniform(rng, -m.max_scale_rate, m.max_scale_rate);
+        let z = uniform(rng, 0.0, 1.0);
+        let mut o = self.make_object(
+            kind,
+            poly,
+            pos,
+            [speed * c, speed * s],
+            angle,
+            omega,
+            z,
+            false,
+        );
+        o.dscale = dscale;
+        o
+    }
+
+    /// Draws background and objects into a new image and fills the id buffer.
+    fn render(&mut self) -> Vec<u8> {
+        let (w, h) = (self.cfg.width as i32, self.cfg.height as i32);
+        let mut img = self.background.clone();
+        self.ids.fill(0);
+        self.order.clear();
+        self.order.extend(0..self.objects.len());
+        let objs = &self.objects;
+        self.order.sort_by(|&a, &b| {
+            objs[a]
+                .z
+                .total_cmp(&objs[b].z)
+                .then(objs[a].id.cmp(&objs[b].id))
+        });
+        let Scene {
+            objects,
+            order,
+            poly,
+            raster,
+            ids,
+            occ,
+            ..
+        } = self;
+        for &k in order.iter() {
+            let o = &mut objects[k];
+            let (sn, cs) = sin_cos(o.angle);
+            let sc = o.scale;
+            let (cx, cy) = (o.pos[0], o.pos[1]);
+            poly.clear();
+            poly.extend(o.poly.iter().map(|p| {
+                [
+                    cx + sc * (cs * p[0] - sn * p[1]),
+                    cy + sc * (sn * p[0] + cs * p[1]),
+                ]
+            }));
+            o.full_area = raster.area(poly);
+            let slot = (k + 1) as u16;
+            // Object coordinates of a pixel centre: the inverse rotation and scale; moving one
+            // pixel right adds (cos, −sin)/scale.
+            let (du, dv) = (cs / sc, -sn / sc);
+            let tex = &o.texture;
+            let texels = tex.bytes();
+            let mut drawn: Option<[i32; 4]> = None;
+            raster.spans(poly, 0..h, |y, xa, xb| {
+                let (xa, xb) = (xa.max(0), xb.min(w));
+                if xb <= xa {
+                    return;
+                }
+                let dy = y as f64 + 0.5 - cy;
+                let dx = xa as f64 + 0.5 - cx;
+                let mut u = (dx * cs + dy * sn) / sc;
+                let mut v = (dy * cs - dx * sn) / sc;
+                let row = y as usize * w as usize;
+                for i in row + xa as usize..row + xb as usize {
+                    if occ[i] == 0 {
+                        let t = tex.offset(u, v);
+                        img[3 * i..3 * i + 3].copy_from_slice(&texels[t..t + 3]);
+                        ids[i] = slot;
+                    }
+                    u += du;
+                    v += dv;
+                }
+                drawn = Some(match drawn {
+                    None => [xa, y, xb, y + 1],
+                    Some(d) => [d[0].min(xa), d[1].min(y), d[2].max(xb), d[3].max(y + 1)],
+                });
+            });
+            o.drawn = drawn;
+        }
+        img
+    }
+
+    /// Ground truth from the id buffer, by increasing id (the objects' order).
+    fn ground_truth(&self) -> Vec<GtObject> {
+        let w = self.cfg.width as usize;
+        let mut out = Vec::with_capacity(self.objects.len());
+        for (k, o) in self.objects.iter().enumerate() {
+            let Some([x0, y0, x1, y1]) = o.drawn else {
+                continue;
+            };
+            let slot = (k + 1) as u16;
+            let (mut tx0, mut ty0, mut tx1, mut ty1) = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
+            for y in y0..y1 {
+                let row = &self.ids[y as usize * w + x0 as usize..y as usize * w + x1 as usize];
+                if let (Some(a), Some(b)) = (
+                    row.iter().position(|&v| v == slot),
+                    row.iter().rposition(|&v| v == slot),
+                ) {
+                    tx0 = tx0.min(x0 + a as i32);
+                    tx1 = tx1.max(x0 + b as i32 + 1);
+                    ty0 = ty0.min(y);
+                    ty1 = ty1.max(y + 1);
+                }
+            }
+            if tx0 >= tx1 {
+                continue;
+            }
+            let (mw, mh) = ((tx1 - tx0) as usize, (ty1 - ty0) as usize);
+            let mut data = Vec::with_capacity(mw * mh);
+            for y in ty0..ty1 {
+                let s = y as usize * w + tx0 as usize;
+                data.extend(self.ids[s..s + mw].iter().map(|&v| (v == slot) as u8));
+            }
+            let Ok(mask) = Mask::new(tx0, ty0, mw as u32, mh as u32, data) else {
+                continue;
+            };
+            let area = mask.area();
+            out.push(GtObject {
+                id: o.id,
+                kind: o.kind,
+                bbox: BBox::new(tx0 as f64, ty0 as f64, mw as f64, mh as f64),
+                mask,
+                visibility: area as f64 / o.full_area.max(area) as f64,
+                full_area: o.full_area,
+                palette: o.palette.clone(),
+            });
+        }
+        out
+    }
+
+    /// Illumination drift and sensor noise, applied after the ground truth is taken.
+    fn apply_appearance(&mut self, index: u32, img: &mut [u8]) {
+        let a = &self.cfg.appearance;
+        // Both passes are plain element-wise integer arithmetic over the whole image, written
+        // so that they vectorise (a lookup table or a per-byte division would not).
+        if a.illumination_drift > 0.0 {
+            let t = (index - 1) as f64 / a.illumination_period;
+            let gain = 1.0 + a.illumination_drift * sin_cos(std::f64::consts::TAU * t).0;
+            let g16 = (gain * 65536.0 + 0.5) as u32;
+            for p in img.iter_mut() {
+                *p = ((*p as u32 * g16 + 32768) >> 16).min(255) as u8;
+            }
+        }
+        if a.sensor_noise > 0 {
+            let amp = a.sensor_noise as i16;
+            let span = 2 * amp as u16 + 1;
+            let mut rng = stream(
+                self.cfg.seed ^ (index as u64).wrapping_mul(0x2545_F491_4F6C_DD1D),
+                SENSOR_STREAM,
+            );
+            self.noise.resize(img.len(), 0);
+            for chunk in self.noise.chunks_mut(8) {
+                let bits: u64 = rng.gen();
+                chunk.copy_from_slice(&bits.to_le_bytes()[..chunk.len()]);
+            }
+            for (p, &n) in img.iter_mut().zip(&self.noise) {
+                // Multiply-shift maps a random byte onto 0..span without a division.
+                let d = ((n as u16 * span) >> 8) as i16 - amp;
+                *p = (*p as i16 + d).clamp(0, 255) as u8;
+            }
+        }
+    }
+
+    /// Advances every object by one frame and applies the border policy.
+    fn step(&mut self) {
+        let (w, h) = (self.cfg.width as f64, self.cfg.height as f64);
+        let m = self.cfg.motion.clone();
+        for o in &mut self.objects {
+            o.age += 1;
+            if !o.scripted {
+                if o.accel_timer == 0 {
+                    let (s, c) = sin_cos(uniform(&mut self.rng, 0.0, std::f64::consts::TAU));
+                    let a = m.accel * uniform(&mut self.rng, 0.0, 1.0).sqrt();
+                    o.acc = [a * c, a * s];
+                    o.accel_timer = below(&mut self.rng, m.accel_period.0, m.accel_period.1 + 1);
+                }
+                o.accel_timer -= 1;
+                o.vel[0] += o.acc[0];
+                o.vel[1] += o.acc[1];
+                let sp = (o.vel[0] * o.vel[0] + o.vel[1] * o.vel[1]).sqrt();
+                if sp > m.speed.1 && sp > 0.0 {
+                    o.vel = [o.vel[0] * m.speed.1 / sp, o.vel[1] * m.speed.1 / sp];
+                } else if sp < m.speed.0 {
+                    o.vel = if sp > 1e-9 {
+                        [o.vel[0] * m.speed.0 / sp, o.vel[1] * m.speed.0 / sp]
+                    } else {
+                        [m.speed.0, 0.0]
+                    };
+                }
+                o.scale += o.scale * o.dscale;
+                if o.scale < m.scale_range.0 || o.scale > m.scale_range.1 {
+                    o.scale = o.scale.clamp(m.scale_range.0, m.scale_range.1);
+                    o.dscale = -o.dscale;
+                }
+            }
+            o.pos[0] += o.vel[0];
+            o.pos[1] += o.vel[1];
+            o.angle += o.omega;
+            if o.angle >= std::f64::consts::TAU || o.angle < 0.0 {
+                o.angle = o.angle.rem_euclid(std::f64::consts::TAU);
+            }
+            let r = o.bound * o.scale;
+            match m.border {
+                BorderPolicy::Bounce => {
+                    for (axis, size) in [(0, w), (1, h)] {
+                        if (o.pos[axis] - r < 0.0 && o.vel[axis] < 0.0)
+                            || (o.pos[axis] + r > size && o.vel[axis] > 0.0)
+                        {
+                            o.vel[axis] = -o.vel[axis];
+                            o.acc[axis] = -o.acc[axis];
+                        }
+                    }
+                }
+                BorderPolicy::Wrap => {
+                    for (axis, size) in [(0, w), (1, h)] {
+                        if o.pos[axis] + r < 0.0 {
+                            o.pos[axis] += size + 2.0 * r;
+                        } else if o.pos[axis] - r > size {
+                            o.pos[axis] -= size + 2.0 * r;
+                        }
+                    }
+                }
+                BorderPolicy::Exit => {}
+            }
+            let inside =
+                o.pos[0] + r > 0.0 && o.pos[0] - r < w && o.pos[1] + r > 0.0 && o.pos[1] - r < h;
+            if inside {
+                o.entered = true;
+            }
+        }
+        if m.border == BorderPolicy::Exit {
+            let before = self.objects.iter().filter(|o| !o.scripted).count();
+            self.objects.retain(|o| {
+                let r = o.bound * o.scale;
+                let inside = o.pos[0] + r > 0.0
+                    && o.pos[0] - r < w
+                    && o.pos[1] + r > 0.0
+                    && o.pos[1] - r < h;
+                // Objects that never made it in (an acceleration turned them away) give up
+                // after a while rather than linger off-screen forever.
+                inside || (!o.entered && o.age < 400)
+            });
+            let after = self.objects.iter().filter(|o| !o.scripted).count();
+            for _ in after..before {
+                let o = self.random_object(false);
+                self.objects.push(o);
+            }
+        }
+    }
+}
+
+impl Iterator for Scene {
+    type Item = SynthFrame;
+
+    fn next(&mut self) -> Option<SynthFrame> {
+        self.frame()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_rle_matches_generic_encoder() {
+        let mut sc = Scene::new(SynthConfig {
+            frames: 3,
+            width: 97,
+            height: 61,
+            shapes: 4,
+            ..SynthConfig::default()
+        })
+        .unwrap();
+        while let Some(f) = sc.frame() {
+            for g in &f.gt {
+                assert_eq!(rle_of(&g.mask, 97, 61), Rle::from_mask(&g.mask, 97, 61));
+            }
+            let off = Mask::new(-5, 50, 20, 20, vec![1; 400]).unwrap();
+            assert_eq!(rle_of(&off, 97, 61), Rle::from_mask(&off, 97, 61));
+        }
+    }
+
+    #[test]
+    fn config_validation_names_the_field() {
+        let mut c = SynthConfig::default();
+        c.noise.miss_rate = 1.5;
+        assert!(matches!(
+            Scene::new(c).unwrap_err(),
+            SynthError::OutOfRange {
+                field: "noise.miss_rate",
+                ..
+            }
+        ));
+        let c = SynthConfig {
+            width: 4,
+            ..SynthConfig::default()
+        };
+        assert!(matches!(
+            Scene::new(c).unwrap_err(),
+            SynthError::InvalidSize { .. }
+        ));
+        let mut c = SynthConfig::default();
+        c.motion.speed = (5.0, 1.0);
+        assert!(matches!(
+            Scene::new(c).unwrap_err(),
+            SynthError::EmptyRange { .. }
+        ));
+        let mut c = SynthConfig::default();
+        c.motion.radius.0 = f64::NAN;
+        assert!(Scene::new(c).is_err());
+        let c = SynthConfig {
+            shapes: 5000,
+            motion: MotionConfig {
+                radius: (400.0, 500.0),
+                ..MotionConfig::default()
+            },
+            ..SynthConfig::default()
+        };
+        assert!(matches!(
+            Scene::new(c).unwrap_err(),
+            SynthError::TooLarge { .. }
+        ));
+    }
+
+    #[test]
+    fn exit_policy_replaces_objects_with_new_ids() {
+        let mut c = SynthConfig::with_seed(3);
+        c.frames = 300;
+        c.motion.speed = (5.0, 8.0);
+        let sc = Scene::new(c).unwrap();
+        let mut max_id = 0;
+        let mut alive = Vec::new();
+        for f in sc {
+            max_id = max_id.max(f.gt.iter().map(|g| g.id).max().unwrap_or(0));
+            alive.push(f.gt.len());
+        }
+        assert!(max_id > 10, "some objects left and were replaced");
+        assert!(alive.iter().all(|&n| n <= 10));
+        assert!(alive.iter().filter(|&&n| n >= 7).count() > 200);
+    }
+}

@@ -1,0 +1,391 @@
+//! Pair costs: how unlike a track and a detection are, as a weighted sum of terms.
+//!
+//! Every term implements [`PairCost`] and returns a cost in `[0, 1]` for a (track, detection)
+//! pair, or `None` when it has no data for that pair (no mask, no image, no features). The
+//! [`CostModel`] combines the terms that have data as `Σ wᵢ·cᵢ / Σ wᵢ`, so a missing term drops
+//! out and the remaining weights renormalise: with shape context and colour only (w_a = w_b =
+//! 0.5) this is the thesis' eq. 39, and in box mode, where neither has data, geometry and motion
+//! carry the decision alone. A term may also gate: a pair whose cost for it exceeds its gate is
+//! never matched.
+//!
+//! Terms that are only meaningful relative to their neighbours (the thesis normalises C1 and C2
+//! "within the cluster") say so with [`PairCost::normalise_in_cluster`]; their costs are then
+//! divided by the largest cost in the pair's region cluster before combining.
+
+use super::lifecycle::Track;
+use super::online::Features;
+use super::regions::Regions;
+use super::Terms;
+use crate::frame::{BBox, Detection};
+
+/// A detection as the pair-cost terms see it.
+#[derive(Debug, Clone, Copy)]
+pub struct Candidate<'a> {
+    /// Index of the detection in the frame's input slice.
+    pub index: usize,
+    /// The detection.
+    pub detection: &'a Detection,
+    /// Its features, computed once this frame (reused as the track's last appearance).
+    pub features: Option<&'a Features>,
+}
+
+/// One term of the pair cost.
+pub trait PairCost: Send {
+    /// Short name, for diagnostics.
+    fn name(&self) -> &str;
+
+    /// The cost in `[0, 1]` of matching `det` to `track`, `None` when the term has no data.
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64>;
+
+    /// Whether the costs should be divided by the largest one in the region cluster before
+    /// combining (thesis' "normalised" C1 and C2). Default: no.
+    fn normalise_in_cluster(&self) -> bool {
+        false
+    }
+}
+
+/// `1 − IoU` between the track's predicted box and the detection, both optionally grown by a
+/// buffer (C-BIoU: Yang et al., "Hard to track objects with irregular motions and similar
+/// appearances? Make it easier by buffering the matching space", WACV 2023).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IouCost {
+    /// Box scale factor before the IoU: 1 = plain IoU, 1.3 grows each box by 15 % of its size
+    /// on every side.
+    pub buffer: f64,
+}
+
+fn buffered(b: &BBox, scale: f64) -> BBox {
+    if scale == 1.0 {
+        return *b;
+    }
+    BBox::from_center(b.center(), b.w * scale, b.h * scale)
+}
+
+impl PairCost for IouCost {
+    fn name(&self) -> &str {
+        "iou"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let a = buffered(&track.predicted_box(), self.buffer);
+        let b = buffered(&det.detection.bbox, self.buffer);
+        Some(1.0 - a.iou(&b))
+    }
+}
+
+/// `1 − IoU` between the track's last *observed* box (not its prediction) and the detection:
+/// OC-SORT's observation-centric recovery. A track lost while its prediction drifted away can
+/// still be found where it was last seen.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LastIouCost;
+
+impl PairCost for LastIouCost {
+    fn name(&self) -> &str {
+        "last_iou"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        Some(1.0 - track.last_detection().bbox.iou(&det.detection.bbox))
+    }
+}
+
+/// Generalised IoU (Rezatofighi et al. 2019): IoU minus the share of the enclosing box that
+/// neither box covers, in `[-1, 1]`.
+pub fn giou(a: &BBox, b: &BBox) -> f64 {
+    let c = a.union(b).area();
+    if c <= f64::EPSILON {
+        return 0.0;
+    }
+    let inter = a.intersection_area(b);
+    let u = a.area() + b.area() - inter;
+    let iou = if u > f64::EPSILON { inter / u } else { 0.0 };
+    iou - (c - u) / c
+}
+
+/// `(1 − GIoU)/2` between the predicted box and the detection.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GiouCost;
+
+impl PairCost for GiouCost {
+    fn name(&self) -> &str {
+        "giou"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        Some((1.0 - giou(&track.predicted_box(), &det.detection.bbox)) / 2.0)
+    }
+}
+
+/// Distance between the predicted and detected centres, over `scale` times the predicted
+/// box's diagonal, clipped to 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CentreDistanceCost {
+    /// Distance, in predicted-box diagonals, that costs 1.
+    pub scale: f64,
+}
+
+impl PairCost for CentreDistanceCost {
+    fn name(&self) -> &str {
+        "centre"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let p = track.predicted_box();
+        let diag = p.w.hypot(p.h).max(1.0);
+        let d = p.center().dist(det.detection.bbox.center());
+        Some((d / (self.scale * diag)).min(1.0))
+    }
+}
+
+/// Size change `|ln(w'/w)| + |ln(h'/h)|` between the predicted box and the detection, over
+/// `scale`, clipped to 1. Degenerate boxes give no data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizeCost {
+    /// Log-size change that costs 1.
+    pub scale: f64,
+}
+
+impl PairCost for SizeCost {
+    fn name(&self) -> &str {
+        "size"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let (p, d) = (track.predicted_box(), det.detection.bbox);
+        if p.w <= 1e-9 || p.h <= 1e-9 || d.w <= 1e-9 || d.h <= 1e-9 {
+            return None;
+        }
+        let c = (d.w / p.w).ln().abs() + (d.h / p.h).ln().abs();
+        Some((c / self.scale).min(1.0))
+    }
+}
+
+/// Squared Mahalanobis distance from the track's motion filter, over `scale`, clipped to 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MahalanobisCost {
+    /// Squared distance (χ² units) that costs 1.
+    pub scale: f64,
+}
+
+impl PairCost for MahalanobisCost {
+    fn name(&self) -> &str {
+        "mahalanobis"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let d2 = track.motion().mahalanobis2(&det.detection.bbox)?;
+        Some((d2 / self.scale).min(1.0))
+    }
+}
+
+/// `1 − mask IoU` between the track's last mask, moved by the predicted displacement, and the
+/// detection's mask. No data unless both have masks.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MaskIouCost;
+
+impl PairCost for MaskIouCost {
+    fn name(&self) -> &str {
+        "mask_iou"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let (a, b) = (
+            track.last_detection().mask.as_ref()?,
+            det.detection.mask.as_ref()?,
+        );
+        let s = track.predicted_shift();
+        if !(s.x.is_finite() && s.y.is_finite()) {
+            return None;
+        }
+        // Whole-pixel shift: clamp first so a wild prediction cannot overflow the cast.
+        let (dx, dy) = (
+            s.x.round().clamp(-1e6, 1e6) as i32,
+            s.y.round().clamp(-1e6, 1e6) as i32,
+        );
+        Some(1.0 - a.translated(dx, dy).iou(b))
+    }
+}
+
+/// A term with its weight and optional gate.
+pub struct WeightedTerm {
+    /// The term.
+    pub term: Box<dyn PairCost>,
+    /// Its weight (> 0).
+    pub weight: f64,
+    /// Pairs whose cost for this term exceeds the gate are never matched.
+    pub gate: Option<f64>,
+}
+
+impl std::fmt::Debug for WeightedTerm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WeightedTerm")
+            .field("term", &self.term.name())
+            .field("weight", &self.weight)
+            .field("gate", &self.gate)
+            .finish()
+    }
+}
+
+/// The weighted, renormalised combination of pair-cost terms (module docs).
+#[derive(Debug, Default)]
+pub struct CostModel {
+    terms: Vec<WeightedTerm>,
+}
+
+impl CostModel {
+    /// The built-in geometric and motion terms of `terms` that have a positive weight. The
+    /// appearance terms are not built in: their modules register them with [`CostModel::push`].
+    pub fn from_terms(terms: &Terms) -> Self {
+        let mut m = Self::default();
+        let t = terms;
+        m.push(
+            Box::new(IouCost {
+                buffer: t.iou.scale,
+            }),
+            t.iou.weight,
+            t.iou.gate,
+        );
+        m.push(Box::new(LastIouCost), t.last_iou.weight, t.last_iou.gate);
+        m.push(Box::new(GiouCost), t.giou.weight, t.giou.gate);
+        m.push(
+            Box::new(CentreDistanceCost {
+                scale: t.centre.scale,
+            }),
+            t.centre.weight,
+            t.centre.gate,
+        );
+        m.push(
+            Box::new(SizeCost {
+                scale: t.size.scale,
+            }),
+            t.size.weight,
+            t.size.gate,
+        );
+        m.push(
+            Box::new(MahalanobisCost {
+                scale: t.mahalanobis.scale,
+            }),
+            t.mahalanobis.weight,
+            t.mahalanobis.gate,
+        );
+        m.push(Box::new(MaskIouCost), t.mask_iou.weight, t.mask_iou.gate);
+        m
+    }
+
+    /// Adds a term. Terms with a weight that is not finite and positive are ignored (disabled).
+    pub fn push(&mut self, term: Box<dyn PairCost>, weight: f64, gate: Option<f64>) {
+        if weight.is_finite() && weight > 0.0 {
+            self.terms.push(WeightedTerm { term, weight, gate });
+        }
+    }
+
+    /// The active terms.
+    pub fn terms(&self) -> &[WeightedTerm] {
+        &self.terms
+    }
+
+    /// Combines one pair's term costs (in [`CostModel::terms`] order): `None` when a gate
+    /// rejects the pair or no term has data, else the renormalised weighted mean.
+    /// Non-finite term costs count as "no data".
+    pub fn combine(&self, costs: &[Option<f64>]) -> Option<f64> {
+        let (mut num, mut den) = (0.0, 0.0);
+        for (t, c) in self.terms.iter().zip(costs) {
+            let Some(c) = c.filter(|c| c.is_finite()) else {
+                continue;
+            };
+            if t.gate.is_some_and(|g| c > g) {
+                return None;
+            }
+            num += t.weight * c;
+            den += t.weight;
+        }
+        (den > 0.0).then(|| num / den)
+    }
+
+    /// The combined cost of every candidate pair of `regions` (`None` = not allowed), in the
+    /// order of `regions.pairs`.
+    pub fn score(
+        &self,
+        tracks: &[Track],
+        dets: &[Candidate<'_>],
+        regions: &Regions,
+    ) -> Vec<Option<f64>> {
+        let nt = self.terms.len();
+        let mut raw: Vec<Option<f64>> = Vec::with_capacity(regions.pairs.len() * nt);
+        for &(ti, di) in &regions.pairs {
+            match (tracks.get(ti), dets.get(di)) {
+                (Some(t), Some(d)) => raw.extend(self.terms.iter().map(|w| w.term.cost(t, d))),
+                _ => raw.extend(std::iter::repeat_n(None, nt)),
+            }
+        }
+        for (k, w) in self.terms.iter().enumerate() {
+            if !w.term.normalise_in_cluster() {
+                continue;
+            }
+            let mut max = vec![0.0f64; regions.clusters.len()];
+            for (p, &cl) in regions.pair_cluster.iter().enumerate() {
+                if let (Some(Some(c)), Some(m)) = (raw.get(p * nt + k), max.get_mut(cl)) {
+                    if c.is_finite() {
+                        *m = m.max(*c);
+                    }
+                }
+            }
+            for (p, &cl) in regions.pair_cluster.iter().enumerate() {
+                let m = max.get(cl).copied().unwrap_or(0.0);
+                if let Some(Some(c)) = raw.get_mut(p * nt + k) {
+                    if m > 0.0 {
+                        *c /= m;
+                    }
+                }
+            }
+        }
+        raw.chunks(nt.max(1))
+            .take(regions.pairs.len())
+            .map(|c| self.combine(c))
+            .chain(std::iter::repeat(None))
+            .take(regions.pairs.len())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn giou_matches_hand_computation() {
+        let a = BBox::new(0.0, 0.0, 2.0, 2.0);
+        let b = BBox::new(3.0, 0.0, 2.0, 2.0);
+        // Disjoint: IoU 0, enclosing 5×2 = 10, union 8 → GIoU = −2/10.
+        assert!((giou(&a, &b) + 0.2).abs() < 1e-12);
+        assert!((giou(&a, &a) - 1.0).abs() < 1e-12);
+        let c = BBox::new(1.0, 0.0, 2.0, 2.0);
+        // IoU = 2/6, enclosing 3×2 = 6 = union → GIoU = IoU.
+        assert!((giou(&a, &c) - 1.0 / 3.0).abs() < 1e-12);
+    }
+
+    struct Fixed(Option<f64>);
+    impl PairCost for Fixed {
+        fn name(&self) -> &str {
+            "fixed"
+        }
+        fn cost(&self, _: &Track, _: &Candidate<'_>) -> Option<f64> {
+            self.0
+        }
+    }
+
+    #[test]
+    fn weights_renormalise_when_a_term_has_no_data() {
+        let mut m = CostModel::default();
+        m.push(Box::new(Fixed(None)), 1.0, None);
+        m.push(Box::new(Fixed(None)), 0.5, None);
+        m.push(Box::new(Fixed(None)), 0.5, Some(0.4));
+        // Thesis Table 7: C1 = 0.1, C2 = 0.15 → OC = 0.125 with w_a = w_b = 0.5 (term 0 absent).
+        assert_eq!(m.combine(&[None, Some(0.1), Some(0.15)]), Some(0.125));
+        // Only the first term has data: its own cost, whatever its weight.
+        assert_eq!(m.combine(&[Some(0.3), None, None]), Some(0.3));
+        // All three: (1·0.2 + 0.5·0.4 + 0.5·0.0) / 2.
+        assert_eq!(m.combine(&[Some(0.2), Some(0.4), Some(0.0)]), Some(0.2));
+        // No data at all: no evidence, no match.
+        assert_eq!(m.combine(&[None, None, None]), None);
+        // A gate rejects regardless of the other terms; NaN counts as no data.
+        assert_eq!(m.combine(&[Some(0.0), Some(0.0), Some(0.5)]), None);
+        assert_eq!(m.combine(&[Some(f64::NAN), Some(0.5), None]), Some(0.5));
+        // Zero weight disables a term entirely.
+        m.push(Box::new(Fixed(Some(1.0))), 0.0, None);
+        assert_eq!(m.terms().len(), 3);
+    }
+}

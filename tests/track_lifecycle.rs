@@ -1,0 +1,400 @@
+//! Track lifecycle, id ownership, input validation and cost-term plumbing of the online tracker.
+
+use proptest::prelude::*;
+use shapetrack::frame::{BBox, Detection, Mask, TrackState, TrackedShape};
+use shapetrack::track::{Candidate, Config, PairCost, Track, TrackError, Tracker};
+
+fn det(x: f64, y: f64) -> Detection {
+    Detection::from_box(BBox::new(x, y, 40.0, 80.0), 0.99)
+}
+
+fn config() -> Config {
+    Config {
+        min_hits: 3,
+        max_lost: 5,
+        ..Config::default()
+    }
+}
+
+fn ids(out: &[TrackedShape]) -> Vec<(u32, u64)> {
+    out.iter().map(|s| (s.frame, s.id)).collect()
+}
+
+#[test]
+fn tentative_is_confirmed_after_min_hits_with_retro_report() {
+    let mut t = Tracker::new(config()).unwrap();
+    assert!(t.update(None, &[det(0.0, 0.0)]).unwrap().is_empty());
+    assert_eq!(t.tracks()[0].state(), TrackState::Tentative);
+    assert_eq!(t.tracks()[0].id(), None);
+    assert!(t.update(None, &[det(2.0, 0.0)]).unwrap().is_empty());
+    let out = t.update(None, &[det(4.0, 0.0)]).unwrap();
+    // The confirming frame also reports the two tentative frames, with their own numbers.
+    assert_eq!(ids(&out), vec![(1, 1), (2, 1), (3, 1)]);
+    assert!(out.iter().all(|s| s.state == TrackState::Confirmed));
+    assert_eq!(out[2].bbox, BBox::new(4.0, 0.0, 40.0, 80.0));
+    assert_eq!(out[2].det_index, Some(0));
+    assert_eq!(t.tracks()[0].state(), TrackState::Confirmed);
+
+    let mut t = Tracker::new(Config {
+        report_tentative: false,
+        ..config()
+    })
+    .unwrap();
+    for x in [0.0, 2.0] {
+        assert!(t.update(None, &[det(x, 0.0)]).unwrap().is_empty());
+    }
+    assert_eq!(
+        ids(&t.update(None, &[det(4.0, 0.0)]).unwrap()),
+        vec![(3, 1)]
+    );
+}
+
+#[test]
+fn min_hits_one_confirms_at_birth() {
+    let mut t = Tracker::new(Config {
+        min_hits: 1,
+        ..config()
+    })
+    .unwrap();
+    let out = t.update(None, &[det(0.0, 0.0), det(200.0, 0.0)]).unwrap();
+    assert_eq!(ids(&out), vec![(1, 1), (1, 2)]);
+}
+
+#[test]
+fn tentative_track_dies_on_its_first_miss() {
+    let mut t = Tracker::new(config()).unwrap();
+    t.update(None, &[det(0.0, 0.0)]).unwrap();
+    t.update(None, &[]).unwrap();
+    assert!(t.tracks().is_empty());
+    assert_eq!(t.ids_issued(), 0);
+}
+
+fn confirmed_moving_track(t: &mut Tracker) -> u64 {
+    let mut id = 0;
+    for k in 0..5 {
+        let out = t.update(None, &[det(3.0 * k as f64, 0.0)]).unwrap();
+        if let Some(s) = out.last() {
+            id = s.id;
+        }
+    }
+    assert_eq!(t.tracks()[0].state(), TrackState::Confirmed);
+    id
+}
+
+#[test]
+fn lost_after_a_miss_then_reidentified_with_its_id() {
+    let mut t = Tracker::new(config()).unwrap();
+    let id = confirmed_moving_track(&mut t);
+    // Frames 6 and 7 without the object: lost, kept, not reported.
+    for _ in 0..2 {
+        assert!(t.update(None, &[]).unwrap().is_empty());
+        assert_eq!(t.tracks()[0].state(), TrackState::Lost);
+    }
+    assert_eq!(t.tracks()[0].misses(), 2);
+    // It reappears where its motion says (x = 3·7 = 21): same id, confirmed again.
+    let out = t.update(None, &[det(21.0, 0.0)]).unwrap();
+    assert_eq!(ids(&out), vec![(8, id)]);
+    assert_eq!(t.tracks()[0].state(), TrackState::Confirmed);
+    assert_eq!(t.ids_issued(), 1);
+}
+
+#[test]
+fn removed_after_max_lost() {
+    let mut t = Tracker::new(config()).unwrap();
+    let id = confirmed_moving_track(&mut t);
+    for k in 0..5 {
+        t.update(None, &[]).unwrap();
+        assert_eq!(t.tracks().len(), 1, "still kept after {} misses", k + 1);
+    }
+    t.update(None, &[]).unwrap();
+    assert!(t.tracks().is_empty(), "removed after max_lost + 1 misses");
+    // The same place again is a new object: a new tentative track, then a new id.
+    for _ in 0..3 {
+        t.update(None, &[det(33.0, 0.0)]).unwrap();
+    }
+    assert_eq!(t.tracks()[0].id(), Some(id + 1));
+}
+
+#[test]
+fn low_score_detections_extend_but_never_start_tracks() {
+    let cfg = Config {
+        high_score: 0.8,
+        new_track_score: 0.9,
+        ..config()
+    };
+    let low = |x: f64| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), 0.6);
+    let mut t = Tracker::new(cfg.clone()).unwrap();
+    for k in 0..5 {
+        assert!(t.update(None, &[low(k as f64)]).unwrap().is_empty());
+    }
+    assert!(t.tracks().is_empty());
+    let mut t = Tracker::new(cfg).unwrap();
+    let id = confirmed_moving_track(&mut t);
+    let out = t.update(None, &[low(15.0)]).unwrap();
+    assert_eq!(ids(&out), vec![(6, id)]);
+    assert_eq!(out[0].score, 0.6);
+}
+
+#[test]
+fn crossing_objects_keep_their_ids() {
+    // Two boxes cross at constant speed, overlapping for a few frames; the Kalman prediction
+    // keeps each on its own path.
+    let mut t = Tracker::new(Config {
+        min_hits: 1,
+        ..config()
+    })
+    .unwrap();
+    let mut by_id: std::collections::HashMap<u64, Vec<f64>> = Default::default();
+    for k in 0..40 {
+        let a = Detection::from_box(BBox::new(10.0 + 8.0 * k as f64, 100.0, 40.0, 80.0), 0.9);
+        let b = Detection::from_box(BBox::new(330.0 - 8.0 * k as f64, 110.0, 40.0, 80.0), 0.9);
+        for s in t.update(None, &[a, b]).unwrap() {
+            by_id.entry(s.id).or_default().push(s.bbox.x);
+        }
+    }
+    assert_eq!(by_id.len(), 2, "{by_id:?}");
+    for xs in by_id.values() {
+        assert_eq!(xs.len(), 40);
+        let dir = (xs[1] - xs[0]).signum();
+        assert!(
+            xs.windows(2).all(|w| (w[1] - w[0]).signum() == dir),
+            "{xs:?}"
+        );
+    }
+}
+
+#[test]
+fn two_trackers_never_share_ids() {
+    let mut a = Tracker::new(config()).unwrap();
+    let mut b = Tracker::new(config()).unwrap();
+    let mut out_a = Vec::new();
+    let mut out_b = Vec::new();
+    for k in 0..6 {
+        let x = 5.0 * k as f64;
+        // Interleaved: a process-wide counter would hand a and b different ids.
+        out_a.extend(a.update(None, &[det(x, 0.0), det(x + 300.0, 0.0)]).unwrap());
+        out_b.extend(b.update(None, &[det(x, 0.0), det(x + 300.0, 0.0)]).unwrap());
+    }
+    assert_eq!(out_a, out_b);
+    let mut ids_a: Vec<u64> = out_a.iter().map(|s| s.id).collect();
+    ids_a.dedup();
+    ids_a.sort();
+    ids_a.dedup();
+    assert_eq!(ids_a, vec![1, 2]);
+}
+
+#[test]
+fn invalid_detections_are_typed_errors() {
+    let mut t = Tracker::new(config()).unwrap();
+    t.update(None, &[det(0.0, 0.0)]).unwrap();
+    let bad = [
+        (BBox::new(f64::NAN, 0.0, 1.0, 1.0), 0.9, "bbox.x"),
+        (BBox::new(0.0, f64::INFINITY, 1.0, 1.0), 0.9, "bbox.y"),
+        (BBox::new(0.0, 0.0, f64::NEG_INFINITY, 1.0), 0.9, "bbox.w"),
+        (BBox::new(0.0, 0.0, 1.0, -2.0), 0.9, "bbox.h"),
+        (BBox::new(1e300, 0.0, 1.0, 1.0), 0.9, "bbox.x"),
+        (BBox::new(0.0, 0.0, 1.0, 1.0), f64::NAN, "score"),
+        (BBox::new(0.0, 0.0, 1.0, 1.0), f64::INFINITY, "score"),
+    ];
+    for (b, score, field) in bad {
+        let dets = [det(0.0, 0.0), Detection::from_box(b, score)];
+        match t.update(None, &dets) {
+            Err(TrackError::InvalidDetection {
+                index: 1, field: f, ..
+            }) => assert_eq!(f, field),
+            other => panic!("{field}: expected an InvalidDetection error, got {other:?}"),
+        }
+    }
+    // Errors leave the tracker untouched: still frame 1, one tentative track.
+    assert_eq!(t.frame(), 1);
+    assert_eq!(t.tracks().len(), 1);
+    // Zero-area boxes are skipped, not errors.
+    let zero = Detection::from_box(BBox::new(5.0, 5.0, 0.0, 10.0), 0.9);
+    t.update(None, &[det(1.0, 0.0), zero]).unwrap();
+    assert_eq!(t.tracks().len(), 1);
+
+    let bad_cfg = Config {
+        max_cost: f64::NAN,
+        ..config()
+    };
+    assert!(matches!(
+        Tracker::new(bad_cfg),
+        Err(TrackError::InvalidConfig { .. })
+    ));
+}
+
+/// A term with no data for any pair: it must not change a single decision.
+struct NoData;
+impl PairCost for NoData {
+    fn name(&self) -> &str {
+        "no-data"
+    }
+    fn cost(&self, _: &Track, _: &Candidate<'_>) -> Option<f64> {
+        None
+    }
+}
+
+/// A term that gates out every pair whose detection is left of x = 100.
+struct LeftGate;
+impl PairCost for LeftGate {
+    fn name(&self) -> &str {
+        "left-gate"
+    }
+    fn cost(&self, _: &Track, d: &Candidate<'_>) -> Option<f64> {
+        Some(if d.detection.bbox.x < 100.0 { 1.0 } else { 0.0 })
+    }
+}
+
+fn run(t: &mut Tracker, frames: &[Vec<Detection>]) -> Vec<TrackedShape> {
+    frames
+        .iter()
+        .flat_map(|d| t.update(None, d).unwrap())
+        .collect()
+}
+
+#[test]
+fn plugged_in_terms_drop_out_without_data_and_gate_with_it() {
+    let frames: Vec<Vec<Detection>> = (0..8)
+        .map(|k| vec![det(4.0 * k as f64, 0.0), det(200.0 + 4.0 * k as f64, 0.0)])
+        .collect();
+    let plain = run(&mut Tracker::new(config()).unwrap(), &frames);
+    let mut with_nodata = Tracker::new(config()).unwrap();
+    with_nodata.add_term(Box::new(NoData), 10.0, Some(0.0));
+    assert_eq!(run(&mut with_nodata, &frames), plain);
+
+    let mut gated = Tracker::new(config()).unwrap();
+    gated.add_term(Box::new(LeftGate), 1.0, Some(0.5));
+    let out = run(&mut gated, &frames);
+    // The left object never matches, so never gets past tentative; the right one does.
+    assert!(out.iter().all(|s| s.bbox.x >= 200.0));
+    assert_eq!(out.len(), 8);
+}
+
+#[test]
+fn mask_detections_track_and_classes_never_mix() {
+    let blob = |x: i32, class: i32| {
+        let mut m = Mask::from_bbox(&BBox::new(0.0, 0.0, 30.0, 30.0));
+        m = m.translated(x, 10);
+        Detection {
+            class,
+            ..Detection::from_mask(m, 1.0)
+        }
+    };
+    let mut t = Tracker::new(config()).unwrap();
+    let mut out = Vec::new();
+    for k in 0..6 {
+        out.extend(t.update(None, &[blob(2 * k, 1)]).unwrap());
+    }
+    assert_eq!(out.len(), 6);
+    assert!(out.iter().all(|s| s.id == 1 && s.mask.is_some()));
+    // Same place, other class: not the same object.
+    let o = t.update(None, &[blob(12, 2)]).unwrap();
+    assert!(o.is_empty());
+    assert_eq!(t.tracks()[0].state(), TrackState::Lost);
+}
+
+/// A track that stops while hidden: its prediction runs on, but the re-identification stage
+/// finds it where it was last seen (IoU with the last observed box).
+#[test]
+fn lost_track_that_stopped_is_reidentified_where_last_seen() {
+    let frames: Vec<Vec<Detection>> = (0..12)
+        .map(|k| match k {
+            0..=5 => vec![det(12.0 * k as f64, 0.0)],
+            6..=8 => vec![],
+            _ => vec![det(61.0, 0.0)],
+        })
+        .collect();
+    let mut with = Tracker::new(config()).unwrap();
+    let out = run(&mut with, &frames);
+    assert!(out.iter().all(|s| s.id == 1), "{:?}", ids(&out));
+    assert_eq!(out.len(), 9);
+
+    let mut off = config();
+    off.reid_terms.last_iou.weight = 0.0;
+    let mut without = Tracker::new(off).unwrap();
+    let out = run(&mut without, &frames);
+    // Without it the stopped object is a new track (reported once confirmed, 3 frames later).
+    let late: Vec<_> = out.iter().filter(|s| s.frame > 9).map(|s| s.id).collect();
+    assert_eq!(late, vec![2, 2, 2], "{:?}", ids(&out));
+}
+
+/// OC-SORT's re-update: after a gap the filter's velocity is the one the gap implies.
+#[test]
+fn reupdate_after_gap_restores_the_velocity() {
+    let frames: Vec<Vec<Detection>> = (0..14)
+        .map(|k| match k {
+            // Walks right at 4 px/frame, hidden for 4 frames, then walks at 8 px/frame.
+            0..=5 => vec![det(4.0 * k as f64, 0.0)],
+            6..=9 => vec![],
+            _ => vec![det(20.0 + 8.0 * (k - 5) as f64, 0.0)],
+        })
+        .collect();
+    let speed = |reupdate: bool| {
+        let mut t = Tracker::new(Config {
+            reupdate_after_gap: reupdate,
+            max_cost: 0.95,
+            ..config()
+        })
+        .unwrap();
+        let out = run(&mut t, &frames[..11]);
+        assert!(out.iter().all(|s| s.id == 1), "{:?}", ids(&out));
+        t.tracks()[0].motion().velocity().x
+    };
+    let (plain, reupdated) = (speed(false), speed(true));
+    // Over the gap it moved 40 px in 5 frames = 8 px/frame; the plain filter still believes
+    // in the old 4 px/frame much more.
+    assert!(
+        (reupdated - 8.0).abs() < (plain - 8.0).abs(),
+        "{plain} vs {reupdated}"
+    );
+    assert!((reupdated - 8.0).abs() < 1.5, "{reupdated}");
+}
+
+fn random_frames() -> impl Strategy<Value = Vec<Vec<Detection>>> {
+    let det = (
+        -50.0f64..700.0,
+        -50.0f64..500.0,
+        0.0f64..120.0,
+        0.0f64..200.0,
+        -1.0f64..2.0,
+    )
+        .prop_map(|(x, y, w, h, s)| Detection::from_box(BBox::new(x, y, w, h), s));
+    proptest::collection::vec(proptest::collection::vec(det, 0..12), 1..25)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// Any valid input: no panic, unique ids per frame, every reported box is one of that
+    /// frame's detections, frames in range, and the same input gives the same output.
+    #[test]
+    fn arbitrary_detections_give_well_formed_output(frames in random_frames(), min_hits in 1u32..4) {
+        let cfg = Config { min_hits, max_lost: 3, ..Config::default() };
+        let mut t = Tracker::new(cfg.clone()).unwrap();
+        let mut all = Vec::new();
+        for (k, dets) in frames.iter().enumerate() {
+            let out = t.update(None, dets).unwrap();
+            let mut seen = std::collections::HashSet::new();
+            for s in &out {
+                prop_assert!(s.frame >= 1 && s.frame as usize <= k + 1);
+                let src = &frames[s.frame as usize - 1];
+                let i = s.det_index.unwrap();
+                prop_assert_eq!(src[i].bbox, s.bbox);
+                prop_assert!(s.id >= 1 && s.id <= t.ids_issued());
+                prop_assert!(s.state == TrackState::Confirmed);
+                if s.frame as usize == k + 1 {
+                    prop_assert!(seen.insert(s.id), "id {} twice in frame {}", s.id, s.frame);
+                }
+            }
+            all.extend(out);
+        }
+        let mut per_frame = std::collections::HashSet::new();
+        for s in &all {
+            prop_assert!(per_frame.insert((s.frame, s.id)), "id {} twice in frame {}", s.id, s.frame);
+        }
+        let mut again = Tracker::new(cfg).unwrap();
+        let rerun: Vec<TrackedShape> =
+            frames.iter().flat_map(|d| again.update(None, d).unwrap()).collect();
+        prop_assert_eq!(rerun, all);
+    }
+}
