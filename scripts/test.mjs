@@ -51,7 +51,7 @@ const steps = [
     needs: ['setup'],
     run: () => sh('cargo', ['clippy', ...WASM, '--lib', ...wasmTests(), '--', '-D', 'warnings']),
   },
-  { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test']) },
+  { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--no-fail-fast']) },
   {
     name: 'wasm-bindgen tests',
     needs: ['setup'],

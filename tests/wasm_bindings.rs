@@ -501,7 +501,7 @@ fn evaluation_scores_perfect_and_broken_results() {
         })
         .collect();
     let sw = scores(&swapped, serde_json::json!({}));
-    assert_eq!(sw["mota"].as_f64().unwrap() < 100.0, true);
+    assert!(sw["mota"].as_f64().unwrap() < 100.0);
     assert_eq!(sw["idsw"], 2);
     assert_eq!(sw["deta"], 100.0);
     let msg = error_message(

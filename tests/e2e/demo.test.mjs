@@ -36,15 +36,15 @@ after(async () => {
   await server?.close();
 });
 
-/** @returns {Promise<any>} */
-const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+/** The page state, or null while the page is (re)loading. @returns {Promise<any>} */
+const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack?.state() ?? null);
 
 /** @param {(s: any) => boolean} pred @param {number} [timeout] */
 async function until(pred, timeout = 120_000) {
   const t0 = Date.now();
   for (;;) {
     const s = await state();
-    if (pred(s)) return s;
+    if (s && pred(s)) return s;
     if (Date.now() - t0 > timeout) throw new Error(`timed out; state: ${JSON.stringify(s)}`);
     await new Promise((r) => setTimeout(r, 100));
   }

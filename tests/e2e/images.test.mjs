@@ -83,6 +83,40 @@ test('an image sequence is tracked, stepped and exported in every format', async
   await page.close();
 });
 
+test('offline mode tracks the whole sequence with a progress bar, then shows the result', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0&mode=offline`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const files = readdirSync(BAG)
+    .filter((f) => f.endsWith('.jpg'))
+    .sort()
+    .slice(0, FRAMES)
+    .map((f) => join(BAG, f));
+  await page.setInputFiles('#file-images', files);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  assert.ok(await page.locator('#play .run').isVisible(), 'the play button says "Run"');
+  await page.click('#play');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().finished, undefined, { timeout: 60_000 });
+  const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.processed, FRAMES);
+  assert.match(st.status, /tracks/);
+  // The progress bar went to the end and is put away.
+  const progress = await page.evaluate(() => {
+    const p = /** @type {HTMLProgressElement} */ (document.getElementById('progress'));
+    return { hidden: p.hidden, value: p.value, max: p.max };
+  });
+  assert.deepEqual(progress, { hidden: true, value: FRAMES, max: FRAMES });
+  assert.ok(!(await page.locator('#play .run').isVisible()), 'after the run the button plays');
+  // Then it plays back what was tracked.
+  await page.keyboard.press('Home');
+  await page.keyboard.press('Space');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame > 5);
+  await page.keyboard.press('Space');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(browser.foreign, []);
 });

@@ -108,7 +108,9 @@ test('after one visit the app loads, imports, draws and exports with the network
     assert.deepEqual(st.ids, [1, 2]);
     assert.equal(st.source, null);
 
-    // The masks are drawn: the overlay is coloured at a disc centre and clear far from both.
+    // The masks are drawn (views redraw on the next animation frame): the overlay is coloured
+    // at a disc centre and clear far from both.
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
     const px = await page.evaluate(() => {
       const c = /** @type {HTMLCanvasElement} */ (document.getElementById('overlay'));
       const ctx = /** @type {CanvasRenderingContext2D} */ (c.getContext('2d'));

@@ -176,7 +176,7 @@ export class App {
         this.playing = false;
         this.loop = null;
         byId('progress', HTMLProgressElement).hidden = true;
-        this.renderTransport();
+        this.render();
       });
   }
 
@@ -187,7 +187,7 @@ export class App {
 
   /** The play loop: replays what is tracked, tracks what is not, in the chosen mode. */
   async run() {
-    if (this.mode === 'offline' && this.tracking) {
+    if (this.mode === 'offline' && this.tracking && !this.finished) {
       await this.runOffline();
       return;
     }
@@ -227,11 +227,12 @@ export class App {
     }
     if (!this.playing || (this.frames && this.processed < this.frames)) return;
     if (!this.finished) {
-      this.status('offline pass: re-linking broken tracks…');
-      const { records } = await this.worker.finish();
+      this.status('offline pass…');
+      const { records, relinked } = await this.worker.finish();
       this.model.replaceAll(records, { fromTracker: true });
       this.finished = true;
-      this.status(`offline pass done: ${this.model.table.ids().length} tracks`);
+      const n = this.model.table.ids().length;
+      this.status(relinked ? `offline pass done: ${n} tracks` : `whole video tracked: ${n} tracks (this core has no offline re-linker yet)`);
     }
     await this.show(this.cur || 1);
   }
@@ -327,6 +328,7 @@ export class App {
         await this.track({ until: next, display: 'every' });
       } finally {
         this.playing = false;
+        this.render();
       }
     } else {
       await this.show(next);
@@ -625,10 +627,29 @@ export class App {
 
   // ---------------------------------------------------------------- view
 
+  /**
+   * Asks for a redraw. State changes call this freely: the views are drawn once per display
+   * frame at most, so tracking faster than the screen refreshes costs no extra drawing.
+   */
   render() {
+    if (!this.raf) this.raf = requestAnimationFrame(() => this.renderNow());
+  }
+
+  /** @type {number} pending animation frame */
+  raf = 0;
+
+  /** Main-thread milliseconds per redraw (smoothed), shown with the fps. */
+  renderMs = 0;
+
+  renderNow() {
+    this.raf = 0;
+    const t0 = performance.now();
     const table = this.model.table;
+    // While playing, the timeline's bars and the track list (whose contents change every
+    // frame) refresh a few times a second; the overlay and playhead every frame.
+    const busy = this.playing;
     this.stage.drawOverlay({ table, gt: this.gt, frame: this.cur, selection: this.selection, options: this.options });
-    this.timeline.render({ table, frames: this.lastFrame, frame: this.cur, selection: this.selection });
+    this.timeline.render({ table, frames: this.lastFrame, frame: this.cur, selection: this.selection, busy });
     this.panel.render({
       table,
       selection: this.selection,
@@ -636,8 +657,10 @@ export class App {
       canUndo: this.model.canUndo,
       canRedo: this.model.canRedo,
       lastEdit: this.lastEdit,
+      busy,
     });
     this.renderTransport();
+    this.renderMs = 0.9 * this.renderMs + 0.1 * (performance.now() - t0);
   }
 
   renderTransport() {
@@ -648,7 +671,7 @@ export class App {
     byId('frame-no').textContent = this.cur ? `${this.cur}${total}` : '–';
     const fps = this.fps.fps;
     byId('fps').textContent = fps ? `${fps.toFixed(1)} fps` : '– fps';
-    byId('fps').title = `worker: detect ${this.lastTimings.detect.toFixed(1)} ms, track ${this.lastTimings.track.toFixed(1)} ms per frame`;
+    byId('fps').title = `per frame: detect ${this.lastTimings.detect.toFixed(1)} ms, track ${this.lastTimings.track.toFixed(1)} ms (worker), draw ${this.renderMs.toFixed(1)} ms (page)`;
     const play = byId('play');
     play.classList.toggle('playing', this.playing);
     play.classList.toggle('run', !this.playing && this.mode === 'offline' && this.tracking && !this.finished);

@@ -70,6 +70,7 @@ function exposeForTests(app) {
       finished: app.finished,
       fps: app.fps.fps,
       timings: app.lastTimings,
+      drawMs: app.renderMs,
       ids: app.model.table.ids(),
       selection: app.selection,
       scores: app.scores,

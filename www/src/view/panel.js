@@ -72,9 +72,10 @@ export class Panel {
   }
 
   /**
-   * @param {{ table: TrackTable, selection: Selection, frame: number, canUndo: boolean, canRedo: boolean, lastEdit: string }} s
+   * @param {{ table: TrackTable, selection: Selection, frame: number, canUndo: boolean, canRedo: boolean, lastEdit: string, busy?: boolean }} s
+   *   `busy`: tracking is running; the track list then refreshes a few times a second
    */
-  render({ table, selection, frame, canUndo, canRedo, lastEdit }) {
+  render({ table, selection, frame, canUndo, canRedo, lastEdit, busy = false }) {
     const { a, b } = selection;
     const has = a !== null && table.has(a);
     this.none.hidden = has;
@@ -104,14 +105,19 @@ export class Panel {
     this.buttons.undo.disabled = !canUndo;
     this.buttons.redo.disabled = !canRedo;
     this.lastEdit.textContent = lastEdit;
-    this.renderList(table, selection);
+    const now = performance.now();
+    if (!busy || now - this.listAt > 400) this.renderList(table, selection);
   }
+
+  /** When the track list was last rebuilt. */
+  listAt = 0;
 
   /** @param {TrackTable} table @param {Selection} selection */
   renderList(table, selection) {
     const key = `${table.version}:${selection.a}:${selection.b}`;
     if (key === this.listKey) return;
     this.listKey = key;
+    this.listAt = performance.now();
     const ids = table.ids();
     this.count.textContent = String(ids.length);
     // A long list only costs DOM nodes; cap it and say so rather than freeze on a huge import.

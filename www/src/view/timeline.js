@@ -27,8 +27,9 @@ export class Timeline {
     this.ids = [];
     this.frames = 1;
     this.rowH = 8;
-    /** Cache key of the bars layer. */
+    /** Cache key of the bars layer, and when it was drawn. */
     this.key = '';
+    this.barsAt = 0;
     this.bars = document.createElement('canvas');
     /** @type {Parameters<Timeline['render']>[0] | null} */
     this.last = null;
@@ -81,7 +82,8 @@ export class Timeline {
   }
 
   /**
-   * @param {{ table: TrackTable, frames: number, frame: number, selection: Selection }} s
+   * @param {{ table: TrackTable, frames: number, frame: number, selection: Selection, busy?: boolean }} s
+   *   `busy`: tracking is running, so the bars (which change every frame) may lag a little
    */
   render(s) {
     this.last = s;
@@ -99,9 +101,11 @@ export class Timeline {
     this.rowH = Math.max(2 * dpr, Math.min(14 * dpr, Math.floor((canvas.height - 4) / Math.max(1, this.ids.length))));
     this.scroll = Math.min(this.scroll, Math.max(0, this.ids.length - this.visibleRows()));
     const key = `${s.table.version}:${this.frames}:${canvas.width}x${canvas.height}:${this.scroll}:${this.ids.length}`;
-    if (key !== this.key) {
+    const now = performance.now();
+    if (key !== this.key && (!s.busy || now - this.barsAt > 150)) {
       this.drawBars(s.table);
       this.key = key;
+      this.barsAt = now;
     }
     ctx.clearRect(0, 0, canvas.width, canvas.height);
     ctx.drawImage(this.bars, 0, 0);

@@ -124,7 +124,10 @@ export class WorkerClient {
     return this.request({ type: 'paint', width, height, bitmap }, bitmap ? [bitmap] : []);
   }
 
-  /** Runs the offline pass over everything tracked so far. @returns {Promise<{ records: TrackRecord[] }>} */
+  /**
+   * Ends an offline run: the offline pass over everything tracked, when the core has one.
+   * @returns {Promise<{ records: TrackRecord[], relinked: boolean }>}
+   */
   finish() {
     return this.request({ type: 'finish' });
   }
