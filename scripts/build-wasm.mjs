@@ -7,7 +7,7 @@
 //   node scripts/build-wasm.mjs --debug   debug build (faster to compile, slow to run)
 
 import { existsSync, readFileSync, statSync } from 'node:fs';
-import { join } from 'node:path';
+import { join, resolve } from 'node:path';
 import { gzipSync } from 'node:zlib';
 import { fileURLToPath } from 'node:url';
 import { ROOT, run } from './setup.mjs';
@@ -31,7 +31,8 @@ export function buildWasm({ debug = false } = {}) {
     'wasm32-unknown-unknown',
     '--no-default-features',
   ]);
-  const input = join(ROOT, 'target', 'wasm32-unknown-unknown', profile, 'shapetrack.wasm');
+  const target = process.env.CARGO_TARGET_DIR ? resolve(ROOT, process.env.CARGO_TARGET_DIR) : join(ROOT, 'target');
+  const input = join(target, 'wasm32-unknown-unknown', profile, 'shapetrack.wasm');
   const out = join(PKG, 'shapetrack_bg.wasm');
   // wasm-bindgen is the slow part of an unchanged rebuild; skip it when its output is newer.
   if (!existsSync(out) || statSync(out).mtimeMs < statSync(input).mtimeMs) {
