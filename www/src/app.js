@@ -414,6 +414,7 @@ export class App {
   }
 
   deselect() {
+    this.panel.cancelRenumber();
     this.selection = { a: null, b: null };
     this.render();
   }

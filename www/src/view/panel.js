@@ -63,6 +63,11 @@ export class Panel {
     this.listKey = '';
   }
 
+  /** Hides the inline "new id" field (Escape, or the selection went away). */
+  cancelRenumber() {
+    this.renumberForm.hidden = true;
+  }
+
   /** Shows the inline "new id" field. @param {number} suggestion */
   askRenumber(suggestion) {
     this.renumberForm.hidden = false;
@@ -78,6 +83,7 @@ export class Panel {
   render({ table, selection, frame, canUndo, canRedo, lastEdit, busy = false }) {
     const { a, b } = selection;
     const has = a !== null && table.has(a);
+    if (!has) this.cancelRenumber();
     this.none.hidden = has;
     this.info.hidden = !has;
     if (has && a !== null) {
