@@ -136,6 +136,75 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   await page.close();
 });
 
+test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const gt = tudGt();
+  await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+  const st0 = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  // The longest track, clicked in the middle of its bar on the timeline.
+  const target = await page.evaluate(() => {
+    const t = /** @type {any} */ (window).__shapetrack.app.model.table;
+    let best = { id: 0, len: 0, span: [0, 0] };
+    for (const id of t.ids()) {
+      const span = t.span(id);
+      if (span[1] - span[0] > best.len) best = { id, len: span[1] - span[0], span };
+    }
+    return best;
+  });
+  const geo = await page.evaluate((id) => {
+    const tl = /** @type {any} */ (window).__shapetrack.app.timeline;
+    const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
+    const r = c.getBoundingClientRect();
+    const row = tl.ids.indexOf(id) - tl.scroll;
+    const k = r.height / c.height;
+    return { left: r.left, top: r.top, width: r.width, rowY: (2 + (row + 0.5) * tl.rowH) * k, gutter: 34 * (r.width / c.width), frames: tl.frames };
+  }, target.id);
+  const frame = Math.round((target.span[0] + target.span[1]) / 2);
+  const x = geo.left + geo.gutter + ((frame - 0.5) / geo.frames) * (geo.width - geo.gutter);
+  await page.mouse.click(x, geo.top + geo.rowY);
+  await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, frame);
+  let st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.deepEqual(st.selection, { a: target.id, b: null });
+
+  // S splits the selected track here: a new id holds the rest.
+  await page.keyboard.press('s');
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.ids.length, st0.ids.length + 1);
+  const fresh = st.selection.a;
+  assert.ok(fresh > Math.max(...st0.ids), 'the later part has a new id above every id');
+  const spans = await page.evaluate(
+    ([a, b]) => {
+      const t = /** @type {any} */ (window).__shapetrack.app.model.table;
+      return [t.span(a), t.span(b)];
+    },
+    [target.id, fresh],
+  );
+  assert.deepEqual(spans, [
+    [target.span[0], frame - 1],
+    [frame, target.span[1]],
+  ]);
+  // Delete removes it; Ctrl+Z twice brings the original track back whole.
+  await page.keyboard.press('Delete');
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.ok(!st.ids.includes(fresh));
+  await page.keyboard.press('Control+z');
+  await page.keyboard.press('Control+z');
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.deepEqual(st.ids, st0.ids);
+  // ? opens the shortcut list.
+  await page.keyboard.press('?');
+  assert.ok(await page.locator('#help-dialog').isVisible());
+  assert.ok((await page.locator('#help-table tr').count()) >= 20);
+  await page.keyboard.press('Escape');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('bad files are refused with a message, not a crash', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);
