@@ -672,8 +672,11 @@ pub fn cropped_mask(rle: &Rle) -> Result<Mask, FrameError> {
         let end = (pos + c as u64).min(total);
         if i % 2 == 1 {
             for p in pos..end {
+                // Inside the rectangle by construction (pass 1 saw the same runs).
                 let (x, y) = (p / h - x0, p % h - y0);
-                data[(y * w + x) as usize] = 1;
+                if let Some(v) = data.get_mut((y * w + x) as usize) {
+                    *v = 1;
+                }
             }
         }
         pos = end;
