@@ -15,7 +15,7 @@ use crate::detect::{
     BackgroundConfig, BackgroundSubtractor, Connectivity, Detector, ShadowConfig, UpdatePolicy,
 };
 use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Summary};
-use crate::frame::{BBox, Detection, Frame, FrameError, Mask, Point, TrackState, TrackedShape};
+use crate::frame::{BBox, Detection, Frame, Mask, Point, TrackState, TrackedShape};
 use crate::io::{coco_video, cvat, motchallenge, Record, RecordFlags, Rle};
 use crate::synth::{Scene, SynthConfig};
 use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
@@ -629,99 +629,7 @@ impl From<&Mask> for MaskBitmap {
 #[wasm_bindgen(js_name = decodeMask)]
 pub fn decode_mask(rle: Ts<RleJs>) -> Result<Ts<MaskBitmap>, JsValue> {
     let rle = rust(rle)?.to_rle()?;
-    ts(&MaskBitmap::from(&cropped_mask(&rle).map_err(js_error)?))
-}
-
-/// `Rle::to_mask` without the full-image bitmap: the page decodes every shape of every frame
-/// it draws, and a 1280×720 scratch image per shape costs more than the drawing. Equal output
-/// (checked by the wasm tests), O(runs + mask area).
-pub fn cropped_mask(rle: &Rle) -> Result<Mask, FrameError> {
-    let h = rle.height as u64;
-    if h == 0 || rle.width == 0 {
-        return Ok(Mask::empty());
-    }
-    let total = h * rle.width as u64;
-    // Pass 1: the foreground's bounding rectangle, from the runs alone.
-    let (mut x0, mut y0, mut x1, mut y1) = (u64::MAX, u64::MAX, 0u64, 0u64);
-    let mut pos = 0u64;
-    for (i, &c) in rle.counts.iter().enumerate() {
-        let end = (pos + c as u64).min(total);
-        if i % 2 == 1 && end > pos {
-            let (xa, xb) = (pos / h, (end - 1) / h);
-            x0 = x0.min(xa);
-            x1 = x1.max(xb);
-            // A run spanning several columns covers whole columns in between.
-            if xb > xa {
-                y0 = 0;
-                y1 = h - 1;
-            } else {
-                y0 = y0.min(pos % h);
-                y1 = y1.max((end - 1) % h);
-            }
-        }
-        pos = end;
-    }
-    if x0 == u64::MAX {
-        return Ok(Mask::empty());
-    }
-    let (w, hh) = (x1 - x0 + 1, y1 - y0 + 1);
-    let mut data = vec![0u8; (w * hh) as usize];
-    // Pass 2: fill the runs, column by column.
-    let mut pos = 0u64;
-    for (i, &c) in rle.counts.iter().enumerate() {
-        let end = (pos + c as u64).min(total);
-        if i % 2 == 1 {
-            for p in pos..end {
-                // Inside the rectangle by construction (pass 1 saw the same runs).
-                let (x, y) = (p / h - x0, p % h - y0);
-                if let Some(v) = data.get_mut((y * w + x) as usize) {
-                    *v = 1;
-                }
-            }
-        }
-        pos = end;
-    }
-    Mask::new(x0 as i32, y0 as i32, w as u32, hh as u32, data)
-}
-
-/// `Rle::from_mask` walking only the mask's columns and rows (whole background columns are one
-/// step): O(image width + mask area) instead of O(image area). The tracker reports every
-/// shape of every frame as RLE, so this is on the per-frame path. Equal output (wasm tests).
-pub fn rle_of_mask(mask: &Mask, width: u32, height: u32) -> Rle {
-    let (w, h) = (width as i64, height as i64);
-    let mut counts = Vec::new();
-    let (mut prev, mut run) = (false, 0u32);
-    let (mx0, my0) = (mask.x() as i64, mask.y() as i64);
-    let (mx1, my1) = (mx0 + mask.width() as i64, my0 + mask.height() as i64);
-    let (ya, yb) = (my0.clamp(0, h), my1.clamp(0, h));
-    let mut push = |v: bool, n: u32, prev: &mut bool, run: &mut u32| {
-        if n == 0 {
-            return;
-        }
-        if v != *prev {
-            counts.push(*run);
-            *run = 0;
-            *prev = v;
-        }
-        *run += n;
-    };
-    for x in 0..w {
-        if x < mx0 || x >= mx1 || ya >= yb {
-            push(false, height, &mut prev, &mut run);
-            continue;
-        }
-        push(false, ya as u32, &mut prev, &mut run);
-        for y in ya..yb {
-            push(mask.get(x as i32, y as i32), 1, &mut prev, &mut run);
-        }
-        push(false, (h - yb) as u32, &mut prev, &mut run);
-    }
-    counts.push(run);
-    Rle {
-        height,
-        width,
-        counts,
-    }
+    ts(&MaskBitmap::from(&rle.to_mask()))
 }
 
 /// Encodes a full-image bitmap (`width·height` bytes, non-zero = foreground) as compressed RLE.
@@ -1353,7 +1261,7 @@ impl Tracker {
         let (w, h) = self.size.unwrap_or((0, 0));
         let mut out = Vec::with_capacity(shapes.len());
         for s in shapes {
-            let rle = s.mask.as_ref().map(|m| rle_of_mask(m, w, h));
+            let rle = s.mask.as_ref().map(|m| Rle::from_mask(m, w, h));
             out.push(ShapeJs::new(s, rle.as_ref()));
             let mut r = Record::from_tracked(s, None);
             r.mask = rle;
