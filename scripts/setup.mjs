@@ -47,6 +47,13 @@ function wasmTarget() {
   run('rustup', ['target', 'add', 'wasm32-unknown-unknown']);
 }
 
+function rustComponents() {
+  // `npm test` runs cargo fmt and clippy; a minimal rustup profile lacks them.
+  const have = output('rustup', ['component', 'list', '--installed']) ?? '';
+  const missing = ['clippy', 'rustfmt'].filter((c) => !have.split('\n').some((l) => l.startsWith(c)));
+  if (missing.length) run('rustup', ['component', 'add', ...missing]);
+}
+
 function wasmBindgen() {
   const v = output('wasm-bindgen', ['--version']) ?? '';
   if (v.includes(WASM_BINDGEN_VERSION)) return;
@@ -66,6 +73,7 @@ function chromium() {
 export function setup({ e2e = false } = {}) {
   npmDeps();
   wasmTarget();
+  rustComponents();
   wasmBindgen();
   if (e2e) chromium();
 }
