@@ -24,11 +24,10 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   minScore?: number,
  *   minFill?: number,
  *   perClassNms?: boolean,
- *   classes?: string[],
  *   background?: import('../../../pkg/shapetrack.js').BackgroundOptions,
  * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
  *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the box
- *   is filled (default 0.2); `classes`: only these class names (default all)
+ *   is filled (default 0.2); `perClassNms`: suppress overlaps only within a class
  */
 
 /** Side of the model's square input. */
@@ -143,8 +142,6 @@ export function ssdDetector(options = {}) {
   let model = null;
   /** @type {import('../../../pkg/shapetrack.js').BackgroundDetector | null} */
   let bg = null;
-  /** @type {Set<number> | null} */
-  let allowed = null;
   /** @type {OffscreenCanvasRenderingContext2D | null} */
   let small = null;
   /** @type {OffscreenCanvasRenderingContext2D | null} */
@@ -188,10 +185,6 @@ export function ssdDetector(options = {}) {
       model = await loading;
       // The background class ("???") is never reported.
       detector.classes = model.labels.map((l, i) => (DECODE.ignoreClasses.includes(i) ? '' : l));
-      if (options.classes) {
-        const want = new Set(options.classes);
-        allowed = new Set(model.labels.flatMap((l, i) => (want.has(l) ? [i] : [])));
-      }
       if (!moving) {
         bg = new core.BackgroundDetector(options.background);
       }
@@ -204,11 +197,7 @@ export function ssdDetector(options = {}) {
       toInput(rgba, /** @type {Float32Array} */ (runner.getInputs()[0].data()));
       if (!runner.infer()) throw new Error(`SSD inference failed on frame ${frame.index}`);
       const outputs = runner.getOutputs();
-      let found = decode(outputs[model.boxes].data(), outputs[model.scores].data(), model.anchors, { ...DECODE, minScore });
-      if (allowed) {
-        const keep = allowed;
-        found = found.filter((c) => keep.has(c.class));
-      }
+      const found = decode(outputs[model.boxes].data(), outputs[model.scores].data(), model.anchors, { ...DECODE, minScore });
       const kept = nms(found, { iou: NMS.iou, maxDetections: NMS.maxDetections, perClass: options.perClassNms ?? false });
 
       let fgImage = null;
