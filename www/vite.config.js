@@ -4,6 +4,7 @@
 import { defineConfig } from 'vite';
 import { fileURLToPath } from 'node:url';
 import { serviceWorker } from '../scripts/vite-sw.mjs';
+import { ssdModel } from '../scripts/models.mjs';
 
 const root = fileURLToPath(new URL('.', import.meta.url));
 
@@ -18,8 +19,10 @@ export default defineConfig({
     // The wasm is fetched by URL (instantiateStreaming), never inlined as base64.
     assetsInlineLimit: 0,
   },
-  worker: { format: 'es' },
+  // The SSD detector's model and TFLite runtime (from npm packages) are emitted by the worker
+  // build, which is the only one that runs them; the page's instance serves them in dev.
+  worker: { format: 'es', plugins: () => [ssdModel({ worker: true })] },
   server: { host: '127.0.0.1', port: 5173 },
   preview: { host: '127.0.0.1', port: 4173 },
-  plugins: [serviceWorker({ source: fileURLToPath(new URL('./src/sw.js', import.meta.url)) })],
+  plugins: [serviceWorker({ source: fileURLToPath(new URL('./src/sw.js', import.meta.url)) }), ssdModel()],
 });

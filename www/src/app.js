@@ -132,6 +132,8 @@ export class App {
       fps: opened.fps,
     };
     this.source = source;
+    // A detector with classes names them: the overlay shows them and exports carry them.
+    if (opened.classes.length) this.labels = opened.classes.flatMap((name, i) => (name ? [{ class: i, name }] : []));
     this.tracking = true;
     this.frames = source.frames ?? 0;
     this.cur = 0;
@@ -649,7 +651,7 @@ export class App {
     // While playing, the timeline's bars and the track list (whose contents change every
     // frame) refresh a few times a second; the overlay and playhead every frame.
     const busy = this.playing;
-    this.stage.drawOverlay({ table, gt: this.gt, frame: this.cur, selection: this.selection, options: this.options });
+    this.stage.drawOverlay({ table, gt: this.gt, frame: this.cur, selection: this.selection, options: this.options, labels: this.labels });
     this.timeline.render({ table, frames: this.lastFrame, frame: this.cur, selection: this.selection, busy });
     this.panel.render({
       table,

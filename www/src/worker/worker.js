@@ -125,7 +125,15 @@ async function open(req) {
   await detector.init({ core, width, height });
   const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker });
   session = { core, memory, width, height, buffer, tracker, detector, scene, canvas: null, ctx2d: null };
-  return { width, height, frames, fps, hasGroundTruth: scene !== null, version: core.version() };
+  return {
+    width,
+    height,
+    frames,
+    fps,
+    hasGroundTruth: scene !== null,
+    version: core.version(),
+    classes: detector.classes ?? [],
+  };
 }
 
 /**
