@@ -283,6 +283,21 @@ fn pair_cost(
     }
     let scale = (s1 * s2).sqrt();
     let radius = scale * (cfg.gate_base + cfg.gate_per_second * f64::from(gap) / fps);
+    // Exact pruning before the rollouts: a prediction moves the end by the closed-form
+    // displacement `v·t + ½·a·t²`, so the error is at least the ends' distance minus that.
+    let t = f64::from(gap) / fps;
+    let shift =
+        |v: Point, a: Point| (v * t + a * (0.5 * cfg.acceleration * t * t)).dist(Point::default());
+    let d = se.position.dist(ms.position);
+    let lb_fwd = (d - shift(se.velocity, se.acceleration)).max(0.0);
+    let lb = if cfg.bidirectional {
+        0.5 * (lb_fwd + (d - shift(ms.velocity * -1.0, ms.acceleration)).max(0.0))
+    } else {
+        lb_fwd
+    };
+    if lb > radius * (1.0 + 1e-9) {
+        return Ok(None);
+    }
     let fwd = rollout_forward(se, gap, fps, cfg.acceleration)?;
     let Some(&pf) = fwd.last() else {
         return Ok(None);
