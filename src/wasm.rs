@@ -18,6 +18,9 @@ use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Su
 use crate::frame::{BBox, Detection, Frame, Mask, Point, TrackState, TrackedShape};
 use crate::io::{coco_video, cvat, motchallenge, Record, RecordFlags, Rle};
 use crate::synth::{Scene, SynthConfig};
+use crate::track::offline::{
+    self, Join, JoinSolver, OfflineConfig, Phase, Progress, SequenceInfo, Snapshots, Trajectory,
+};
 use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -85,6 +88,18 @@ enum BindingError {
         frame: u32,
         /// Frames in the sequence.
         frames: u32,
+    },
+    /// `finish` on a tracker built without offline options.
+    #[error("this tracker was built without offline options: create it with new Tracker(config, {{ fps }}) to run finish()")]
+    NotOffline,
+    /// The offline pass has run: the tracker's result is final.
+    #[error("this tracker is finished (the offline pass has run): start a new tracker")]
+    Finished,
+    /// The progress callback threw.
+    #[error("progress callback threw: {message}")]
+    Progress {
+        /// The exception's message.
+        message: String,
     },
     /// An option has a value the bindings do not accept.
     #[error("option {name}: {message}")]
@@ -910,14 +925,15 @@ impl BackgroundOptions {
 }
 
 // ------------------------------------------------------------------------------------------
-// Tracker
+// Tracker settings and shapes
 
-/// Reads a field that may be absent (keep the default), `null` (no value) or a number.
-fn double_option<'de, D>(d: D) -> Result<Option<Option<f64>>, D::Error>
+/// Reads a field that may be absent (keep the default), `null` (no value) or a value.
+fn double_option<'de, D, T>(d: D) -> Result<Option<Option<T>>, D::Error>
 where
     D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
 {
-    Option::<f64>::deserialize(d).map(Some)
+    Option::<T>::deserialize(d).map(Some)
 }
 
 /// Weight, gate and scale of one pair-cost term; absent fields keep their defaults.
@@ -1153,35 +1169,397 @@ impl ShapeJs {
     }
 }
 
+// ------------------------------------------------------------------------------------------
+// Offline pass (thesis ch. 5): options, progress, result
+
+/// Settings of the re-linker (the core's `track::offline::RelinkConfig`, every field
+/// optional: absent fields keep the core's defaults).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct RelinkOptions {
+    /// A slave must end at most this long (seconds) before its master starts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_gap_seconds: Option<f64>,
+    /// Slaves kept per master, the most recently ended first.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_slaves: Option<u32>,
+    /// Of those, how many with the most SIFT connections are kept (with frames only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub appearance_keep: Option<u32>,
+    /// Length (seconds) of the centroid history velocity and acceleration are fitted on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub history_seconds: Option<f64>,
+    /// Shapes smaller than this fraction of the median size near an end are not used for
+    /// its motion (they are entering or leaving an occlusion).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub reliable_size: Option<f64>,
+    /// Scale of the estimated acceleration in the rollout (1: the thesis, 0: constant velocity).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub acceleration: Option<f64>,
+    /// Also roll the master back to the slave's end and average both errors.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub bidirectional: Option<bool>,
+    /// Gate radius at zero gap, in shape sizes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub gate_base: Option<f64>,
+    /// Growth of the gate radius per second of gap, in shape sizes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub gate_per_second: Option<f64>,
+    /// Largest ratio of the two ends' sizes a join accepts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_size_ratio: Option<f64>,
+    /// How joins are chosen: all together (min-cost matching) or the thesis' greedy order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional, type = "\"global\" | \"greedy\"")]
+    pub solver: Option<JoinSolver>,
+    /// Refuse a join whose predicted path leaves the image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub stay_in_view: Option<bool>,
+}
+
+/// Settings of gap filling (the core's `FillConfig`; absent fields keep their defaults).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct FillOptions {
+    /// Longest gap filled, in missing frames (0: no filling).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_gap: Option<u32>,
+    /// Also fill gaps inside one online track, not only between joined ones.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub within_tracks: Option<bool>,
+    /// Path of the filled shapes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional, type = "\"linear\" | \"kalman\"")]
+    pub trajectory: Option<Trajectory>,
+}
+
+/// SIFT detector settings for the appearance snapshots (the core's `SiftConfig`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct SiftOptions {
+    /// Layers per octave (1..=8).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub n_octave_layers: Option<u32>,
+    /// Contrast threshold.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub contrast_threshold: Option<f32>,
+    /// Edge rejection threshold.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub edge_threshold: Option<f32>,
+    /// Blur of the first layer.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub sigma: Option<f32>,
+    /// Upsample the crop 2× first.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub upsample: Option<bool>,
+    /// Keep only the strongest keypoints; `null`: all.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub max_keypoints: Option<Option<u32>>,
+    /// Downscale crops whose longer side exceeds this; `null`: never.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub max_side: Option<Option<u32>>,
+}
+
+/// Descriptor matching settings (the core's `MatchConfig`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct MatchOptions {
+    /// Lowe's ratio.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub ratio: Option<f32>,
+    /// Require mutual nearest neighbours.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub cross_check: Option<bool>,
+}
+
+/// Appearance snapshots (the core's `AppearanceConfig`): a small grey crop of each track's
+/// first and last appearance, taken from the frames during the online pass.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct AppearanceOptions {
+    /// Take snapshots at all (only `update` with pixels can).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub enabled: Option<bool>,
+    /// Longer side crops are downscaled to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_side: Option<u32>,
+    /// SIFT detector settings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub sift: Option<SiftOptions>,
+    /// Descriptor matching settings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub matching: Option<MatchOptions>,
+}
+
+/// What a tracker needs to run the offline pass at the end: the video's frame rate, and the
+/// offline stages' settings (every one optional; the online part is the tracker's config).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+#[serde(deny_unknown_fields)]
+pub struct OfflineOptions {
+    /// Frames per second of the video: the re-linker's filter steps `Δt = 1/fps`, and its
+    /// gates are in seconds.
+    pub fps: f64,
+    /// Image width, for box-only tracking (`updateDetections`); frames tell it otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub width: Option<u32>,
+    /// Image height, for box-only tracking.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub height: Option<u32>,
+    /// The re-linker.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub relink: Option<RelinkOptions>,
+    /// Gap filling.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub fill: Option<FillOptions>,
+    /// Appearance snapshots.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub appearance: Option<AppearanceOptions>,
+}
+
+impl OfflineOptions {
+    /// The core config: the given offline settings over the defaults, around `online`.
+    pub fn to_core(&self, online: TrackConfig) -> Result<OfflineConfig, JsValue> {
+        // Every part takes defaults for absent fields, so a JSON round trip does the overlay.
+        let parts = serde_json::json!({
+            "relink": self.relink.clone().unwrap_or_default(),
+            "fill": self.fill.clone().unwrap_or_default(),
+            "appearance": self.appearance.clone().unwrap_or_default(),
+        });
+        let mut cfg: OfflineConfig = serde_json::from_value(parts).map_err(js_error)?;
+        cfg.online = online;
+        cfg.validate().map_err(js_error)?;
+        Ok(cfg)
+    }
+}
+
+/// Where the offline pass is: its phase and how far into it, in `[0, 1]`. `finish` reports
+/// the phases after the online pass, in order: candidates, appearance (only with frames),
+/// matching, filling, done.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Tsify)]
+pub struct OfflineProgress {
+    /// Current phase.
+    #[tsify(
+        type = "\"online\" | \"candidates\" | \"appearance\" | \"matching\" | \"filling\" | \"done\""
+    )]
+    pub phase: Phase,
+    /// Fraction of the phase done.
+    pub fraction: f64,
+}
+
+impl From<Progress> for OfflineProgress {
+    fn from(p: Progress) -> Self {
+        OfflineProgress {
+            phase: p.phase,
+            fraction: p.fraction,
+        }
+    }
+}
+
+/// One join the re-linker made: track `master` (an online id) continues track `slave`, and
+/// now carries the slave's identity.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct JoinJs {
+    /// Online id of the track that ended.
+    pub slave: i64,
+    /// Online id of the track that continues it.
+    pub master: i64,
+    /// The slave's last frame.
+    pub slave_last: u32,
+    /// The master's first frame.
+    pub master_first: u32,
+    /// Gate-normalised cost of the join, in `[0, 1]`.
+    pub cost: f64,
+    /// SIFT connections between the two ends, when both had appearance snapshots.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub connections: Option<u32>,
+}
+
+impl From<&Join> for JoinJs {
+    fn from(j: &Join) -> Self {
+        JoinJs {
+            slave: j.slave as i64,
+            master: j.master as i64,
+            slave_last: j.slave_last,
+            master_first: j.master_first,
+            cost: j.cost,
+            connections: j.connections.map(|c| c as u32),
+        }
+    }
+}
+
+/// What `finish` returns.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct OfflineOutput {
+    /// Every record after the offline pass, by frame then id: the online records under their
+    /// joined ids, and the filled-in ones (`interpolated: true`).
+    pub records: Records,
+    /// The joins made, by the master's first frame.
+    pub joins: Vec<JoinJs>,
+    /// Number of records filled in.
+    pub filled: u32,
+}
+
+#[wasm_bindgen]
+extern "C" {
+    /// A progress callback: called with each progress report of the offline pass.
+    // Parenthesised: the generated signature appends `| null` to optional parameters.
+    #[wasm_bindgen(typescript_type = "((progress: OfflineProgress) => void)")]
+    pub type ProgressCallback;
+}
+
+/// A JS exception's message (an `Error`'s message, else the value as text).
+fn thrown_message(v: &JsValue) -> String {
+    if let Some(e) = v.dyn_ref::<js_sys::Error>() {
+        return String::from(e.message());
+    }
+    if let Some(s) = v.as_string() {
+        return s;
+    }
+    js_sys::JSON::stringify(v)
+        .ok()
+        .and_then(|s| s.as_string())
+        .unwrap_or_else(|| format!("{v:?}"))
+}
+
+// ------------------------------------------------------------------------------------------
+// Tracker
+
 /// The shapes one update reports.
 #[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
 #[serde(transparent)]
 pub struct Shapes(pub Vec<ShapeJs>);
 
-/// The online tracker. Owns its ids (two trackers on a page never share a counter) and keeps
-/// every reported shape, so the whole result can be read back or exported at any time.
+/// One reported shape as the tracker keeps it: the shape without its mask bitmap, and the
+/// mask as RLE (a few hundred bytes instead of a bitmap the size of the box), so a long video's
+/// history stays small.
+#[derive(Debug, Clone)]
+struct Kept {
+    shape: TrackedShape,
+    rle: Option<Rle>,
+}
+
+impl Kept {
+    fn record(&self) -> Record {
+        let mut r = Record::from_tracked(&self.shape, None);
+        r.mask = self.rle.clone();
+        r
+    }
+}
+
+/// What a tracker built with offline options keeps for the offline pass besides its history.
+struct OfflineState {
+    config: OfflineConfig,
+    fps: f64,
+    /// Image size from the options (box mode); frames override it.
+    size: Option<(u32, u32)>,
+    /// Each track's first and last appearance, taken while the frames stream past.
+    snapshots: Snapshots,
+}
+
+/// The tracker. Owns its ids (two trackers on a page never share a counter) and keeps every
+/// reported shape, so the whole result can be read back or exported at any time.
+///
+/// Built with offline options (`new Tracker(config, { fps })`) it also keeps what the offline
+/// pass needs, and `finish()` runs that pass (thesis ch. 5: trajectory re-linking across
+/// occlusions, then gap filling) over every frame tracked so far.
 #[wasm_bindgen]
 pub struct Tracker {
     inner: CoreTracker,
-    /// Everything reported so far, as records (masks as RLE over the frame).
-    history: Vec<Record>,
+    /// Everything reported so far; after `finish`, the offline result.
+    history: Vec<Kept>,
     /// Frame size, known from the first frame (masks need it for RLE).
     size: Option<(u32, u32)>,
+    /// Present when the tracker was built for the offline pass.
+    offline: Option<OfflineState>,
+    /// `finish` ran: the history is final and no frame may follow.
+    finished: bool,
 }
 
 #[wasm_bindgen]
 impl Tracker {
-    /// A tracker with the core's defaults, or with the given settings over them.
+    /// A tracker with the core's defaults, or with the given settings over them. With
+    /// `offline` options it can run the offline pass at the end (`finish`).
     #[wasm_bindgen(constructor)]
-    pub fn new(config: Option<Ts<TrackerConfig>>) -> Result<Tracker, JsValue> {
+    pub fn new(
+        config: Option<Ts<TrackerConfig>>,
+        offline: Option<Ts<OfflineOptions>>,
+    ) -> Result<Tracker, JsValue> {
         let cfg = match config {
             Some(c) => settings(c)?.to_core()?,
             None => TrackConfig::default(),
+        };
+        let offline = match offline {
+            Some(o) => {
+                let o = settings(o)?;
+                if !(o.fps.is_finite() && o.fps > 0.0) {
+                    return Err(js_error(BindingError::Option {
+                        name: "fps",
+                        message: format!("{} (must be a finite number > 0)", o.fps),
+                    }));
+                }
+                let size = match (o.width, o.height) {
+                    (Some(w), Some(h)) => Some((w, h)),
+                    (None, None) => None,
+                    _ => {
+                        return Err(js_error(BindingError::Option {
+                            name: "width/height",
+                            message: "give both or neither".to_string(),
+                        }))
+                    }
+                };
+                Some(OfflineState {
+                    config: o.to_core(cfg.clone())?,
+                    fps: o.fps,
+                    size,
+                    snapshots: Snapshots::new(),
+                })
+            }
+            None => None,
         };
         Ok(Tracker {
             inner: CoreTracker::new(cfg).map_err(js_error)?,
             history: Vec::new(),
             size: None,
+            offline,
+            finished: false,
         })
     }
 
@@ -1191,7 +1569,20 @@ impl Tracker {
         self.inner.frame()
     }
 
+    /// Whether this tracker can run the offline pass (it was built with offline options).
+    #[wasm_bindgen(getter)]
+    pub fn offline(&self) -> bool {
+        self.offline.is_some()
+    }
+
+    /// Whether the offline pass has run (the result is final; no frame may follow).
+    #[wasm_bindgen(getter)]
+    pub fn finished(&self) -> bool {
+        self.finished
+    }
+
     /// Tracks frame `frame` (1-based; must be the next one) with its pixels and detections.
+    /// Returns the online shapes this frame produced.
     pub fn update(
         &mut self,
         frame: u32,
@@ -1205,7 +1596,18 @@ impl Tracker {
             .inner
             .update(Some(&image), &detections.inner)
             .map_err(js_error)?;
-        self.report(&shapes)
+        if let Some(off) = self.offline.as_mut() {
+            if off.config.appearance.enabled {
+                // Only shapes seen in this frame: a track confirmed now also reports its
+                // tentative frames, whose pixels are gone.
+                let now = self.inner.frame();
+                for s in shapes.iter().filter(|s| s.frame == now) {
+                    off.snapshots
+                        .record(&image, s, off.config.appearance.max_side);
+                }
+            }
+        }
+        self.report(shapes)
     }
 
     /// Tracks frame `frame` from detections only (box mode: no pixels, e.g. a `det.txt`).
@@ -1220,19 +1622,105 @@ impl Tracker {
             .inner
             .update(None, &detections.inner)
             .map_err(js_error)?;
-        self.report(&shapes)
+        self.report(shapes)
     }
 
-    /// Every shape reported so far, as records (by frame, then id).
+    /// Every shape reported so far, as records (by frame, then id); after `finish`, the
+    /// offline result.
     pub fn tracks(&self) -> Result<Ts<Records>, JsValue> {
-        let mut recs = self.history.clone();
+        let mut recs: Vec<Record> = self.history.iter().map(Kept::record).collect();
         recs.sort_by_key(|r| (r.frame, r.id));
         ts(&from_core_records(&recs))
+    }
+
+    /// The offline pass over every frame tracked so far: joins tracks broken by occlusions
+    /// (Kalman trajectory re-linking, joins chosen together by min-cost matching) and fills
+    /// the gaps with shapes marked interpolated. `progress` is called with each progress
+    /// report; if it throws, `finish` throws an `Error` carrying that message, and the tracker
+    /// is left as it was (`finish` may be called again). After `finish` the tracker is final:
+    /// `tracks()` returns the result and `update` refuses new frames.
+    pub fn finish(
+        &mut self,
+        progress: Option<ProgressCallback>,
+    ) -> Result<Ts<OfflineOutput>, JsValue> {
+        if self.finished {
+            return Err(js_error(BindingError::Finished));
+        }
+        let Some(off) = self.offline.as_ref() else {
+            return Err(js_error(BindingError::NotOffline));
+        };
+        let callback: Option<js_sys::Function> = progress.map(JsCast::unchecked_into);
+        // The core's progress callback cannot fail: the first exception is kept, further
+        // reports are dropped, and it is raised once the pass returns.
+        let mut thrown: Option<JsValue> = None;
+        let mut report = |p: Progress| {
+            let Some(f) = callback.as_ref() else { return };
+            if thrown.is_some() {
+                return;
+            }
+            let value = match OfflineProgress::from(p).into_ts() {
+                Ok(v) => JsValue::from(v),
+                Err(e) => {
+                    thrown = Some(js_error(e));
+                    return;
+                }
+            };
+            if let Err(e) = f.call1(&JsValue::NULL, &value) {
+                thrown = Some(e);
+            }
+        };
+        let seq = SequenceInfo {
+            fps: off.fps,
+            image_size: self.size.or(off.size),
+        };
+        let snapshots = (!off.snapshots.is_empty()).then_some(&off.snapshots);
+        let result = offline::relink(
+            self.relink_input(),
+            snapshots,
+            &off.config,
+            &seq,
+            &mut report,
+        )
+        .map_err(js_error)?;
+        if let Some(e) = thrown {
+            return Err(js_error(BindingError::Progress {
+                message: thrown_message(&e),
+            }));
+        }
+
+        let map = result.id_map();
+        let (w, h) = seq.image_size.unwrap_or((0, 0));
+        for k in &mut self.history {
+            if let Some(&root) = map.get(&k.shape.id) {
+                k.shape.id = root;
+            }
+        }
+        let mut filled = 0u32;
+        for mut s in result.shapes.into_iter().filter(|s| s.interpolated) {
+            let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
+            self.history.push(Kept { shape: s, rle });
+            filled += 1;
+        }
+        self.history.sort_by_key(|k| (k.shape.frame, k.shape.id));
+        self.finished = true;
+        // The snapshots are not needed any more.
+        if let Some(off) = self.offline.as_mut() {
+            off.snapshots = Snapshots::new();
+        }
+        let records: Vec<Record> = self.history.iter().map(Kept::record).collect();
+        ts(&OfflineOutput {
+            records: from_core_records(&records),
+            joins: result.joins.iter().map(JoinJs::from).collect(),
+            filled,
+        })
     }
 }
 
 impl Tracker {
     fn check_next(&self, frame: u32) -> Result<(), JsValue> {
+        if self.finished {
+            return Err(js_error(BindingError::Finished));
+        }
         let expected = self.inner.frame() + 1;
         if frame != expected {
             return Err(js_error(BindingError::FrameOrder {
@@ -1257,17 +1745,41 @@ impl Tracker {
         Ok(())
     }
 
-    fn report(&mut self, shapes: &[TrackedShape]) -> Result<Ts<Shapes>, JsValue> {
+    fn report(&mut self, shapes: Vec<TrackedShape>) -> Result<Ts<Shapes>, JsValue> {
         let (w, h) = self.size.unwrap_or((0, 0));
         let mut out = Vec::with_capacity(shapes.len());
-        for s in shapes {
-            let rle = s.mask.as_ref().map(|m| Rle::from_mask(m, w, h));
-            out.push(ShapeJs::new(s, rle.as_ref()));
-            let mut r = Record::from_tracked(s, None);
-            r.mask = rle;
-            self.history.push(r);
+        for mut s in shapes {
+            let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
+            out.push(ShapeJs::new(&s, rle.as_ref()));
+            self.history.push(Kept { shape: s, rle });
         }
         ts(&Shapes(out))
+    }
+
+    /// The online shapes for the re-linker. Masks are decoded only for shapes at the end of a
+    /// run of consecutive frames of their track: gap filling carries the mask of a gap's end
+    /// along the path, and nothing else in the offline pass reads masks, so the whole video's
+    /// masks never sit in memory as bitmaps at once.
+    fn relink_input(&self) -> Vec<TrackedShape> {
+        let present: std::collections::HashSet<(u64, u32)> = self
+            .history
+            .iter()
+            .map(|k| (k.shape.id, k.shape.frame))
+            .collect();
+        self.history
+            .iter()
+            .map(|k| {
+                let (id, f) = (k.shape.id, k.shape.frame);
+                let end = f <= 1
+                    || !present.contains(&(id, f - 1))
+                    || !present.contains(&(id, f.saturating_add(1)));
+                let mut s = k.shape.clone();
+                if end {
+                    s.mask = k.rle.as_ref().map(Rle::to_mask);
+                }
+                s
+            })
+            .collect()
     }
 }
 

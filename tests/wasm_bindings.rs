@@ -281,13 +281,13 @@ fn partial_tracker_config_overrides_only_what_it_names() {
     assert_eq!(cfg.min_hits, def.min_hits);
     // Through the JS entry point: a typo is an error, not silently ignored.
     let msg = error_message(
-        Tracker::new(Some(ts(js(&serde_json::json!({ "max_lots": 3 })))))
+        Tracker::new(Some(ts(js(&serde_json::json!({ "max_lots": 3 })))), None)
             .err()
             .unwrap(),
     );
     assert!(msg.contains("max_lots"), "{msg}");
     let msg = error_message(
-        Tracker::new(Some(ts(js(&serde_json::json!({ "min_hits": 0 })))))
+        Tracker::new(Some(ts(js(&serde_json::json!({ "min_hits": 0 })))), None)
             .err()
             .unwrap(),
     );
@@ -376,7 +376,7 @@ fn pixels(buf: &FrameBuffer) -> Vec<u8> {
 fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
     let mut s = scene("default");
     let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
-    let mut tracker = Tracker::new(None).unwrap();
+    let mut tracker = Tracker::new(None, None).unwrap();
     // Track id per gt object over 40 frames, from the scene's own detections.
     let mut seen: std::collections::BTreeMap<i64, std::collections::BTreeSet<i64>> =
         Default::default();
@@ -513,4 +513,273 @@ fn evaluation_scores_perfect_and_broken_results() {
         .unwrap(),
     );
     assert!(msg.contains("similarity"), "{msg}");
+}
+
+// ------------------------------------------------------------------------------------------
+// The offline pass from JS
+
+#[wasm_bindgen_test]
+fn offline_option_types_mirror_the_core_config_exactly() {
+    let core = serde_json::to_value(shapetrack::track::offline::OfflineConfig::default()).unwrap();
+    // Each mirrored part knows every core field (deny_unknown_fields) and no other.
+    let relink: RelinkOptions = serde_json::from_value(core["relink"].clone()).unwrap();
+    assert_eq!(serde_json::to_value(&relink).unwrap(), core["relink"]);
+    let fill: FillOptions = serde_json::from_value(core["fill"].clone()).unwrap();
+    assert_eq!(serde_json::to_value(&fill).unwrap(), core["fill"]);
+    let app: AppearanceOptions = serde_json::from_value(core["appearance"].clone()).unwrap();
+    assert_eq!(serde_json::to_value(&app).unwrap(), core["appearance"]);
+    let opts: OfflineOptions = serde_json::from_value(serde_json::json!({ "fps": 25 })).unwrap();
+    assert_eq!(
+        opts.to_core(shapetrack::track::Config::default()).unwrap(),
+        shapetrack::track::offline::OfflineConfig::default()
+    );
+    // A partial setting changes only what it names.
+    let opts: OfflineOptions = serde_json::from_value(
+        serde_json::json!({ "fps": 30, "relink": { "solver": "greedy" }, "fill": { "max_gap": 4 } }),
+    )
+    .unwrap();
+    let cfg = opts.to_core(shapetrack::track::Config::default()).unwrap();
+    assert_eq!(
+        cfg.relink.solver,
+        shapetrack::track::offline::JoinSolver::Greedy
+    );
+    assert_eq!(cfg.fill.max_gap, 4);
+    assert_eq!(cfg.relink.gate_base, 0.5);
+}
+
+#[wasm_bindgen_test]
+fn offline_options_are_checked() {
+    let bad = |opts: serde_json::Value| -> String {
+        error_message(Tracker::new(None, Some(ts(js(&opts)))).err().unwrap())
+    };
+    assert!(bad(serde_json::json!({ "fps": 0 })).contains("fps"));
+    assert!(bad(serde_json::json!({})).contains("fps"));
+    let msg = bad(serde_json::json!({ "fps": 25, "relink": { "max_slave": 3 } }));
+    assert!(msg.contains("max_slave"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "relink": { "max_size_ratio": 0.5 } }));
+    assert!(msg.contains("relink.max_size_ratio"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "width": 640 }));
+    assert!(msg.contains("width/height"), "{msg}");
+    // An online tracker has no offline pass.
+    let mut online = Tracker::new(None, None).unwrap();
+    assert!(!online.offline());
+    let msg = error_message(online.finish(None).err().unwrap());
+    assert!(msg.contains("offline options"), "{msg}");
+}
+
+/// A JS function that appends its argument to `log` (what a page's progress callback does).
+fn recorder(log: &js_sys::Array) -> ProgressCallback {
+    let push = js_sys::Function::new_with_args("p", "this.push(p)").bind0(log);
+    JsValue::from(push).unchecked_into()
+}
+
+/// Ids in a list of records.
+fn ids(records: &[RecordJs]) -> std::collections::BTreeSet<i64> {
+    records.iter().map(|r| r.id).collect()
+}
+
+#[wasm_bindgen_test]
+fn finish_rejoins_occluded_tracks_and_fills_the_gaps() {
+    // Eight shapes bouncing behind two bars (hidden ~10 frames each time), tracked from the
+    // scene's own noisy mask detections.
+    let mut s = scene("occlusion");
+    let (w, h, frames, fps) = (s.width(), s.height(), s.frames(), s.fps());
+    let mut buf = FrameBuffer::new(w, h).unwrap();
+    let opts = serde_json::json!({ "fps": fps });
+    let mut tracker = Tracker::new(None, Some(ts(js(&opts)))).unwrap();
+    assert!(tracker.offline());
+    let mut gt = Vec::new();
+    for n in 1..=frames {
+        let f = s.render(n, &mut buf).unwrap();
+        gt.extend(records_of(f.ground_truth().unwrap()));
+        tracker.update(n, &buf, &f.detections()).unwrap();
+    }
+    let online = records_of(tracker.tracks().unwrap());
+    assert!(online.iter().all(|r| !r.interpolated));
+
+    let log = js_sys::Array::new();
+    let t0 = js_sys::Date::now();
+    let out = tracker.finish(Some(recorder(&log))).unwrap();
+    let finish_ms = js_sys::Date::now() - t0;
+    let out: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(out)).unwrap();
+    let records: Vec<RecordJs> = serde_json::from_value(out["records"].clone()).unwrap();
+    let joins = out["joins"].as_array().unwrap();
+
+    // Joins were made, and each master's id is gone (it carries its slave's identity now).
+    assert!(!joins.is_empty(), "no joins");
+    let final_ids = ids(&records);
+    for j in joins {
+        assert!(!final_ids.contains(&j["master"].as_i64().unwrap()), "{j}");
+        assert!(j["slave_last"].as_u64().unwrap() < j["master_first"].as_u64().unwrap());
+    }
+    assert!(
+        final_ids.len() < ids(&online).len(),
+        "offline ids {} vs online {}",
+        final_ids.len(),
+        ids(&online).len()
+    );
+    // Gaps were filled: interpolated records, with masks carried along, inside the frames.
+    let filled: Vec<&RecordJs> = records.iter().filter(|r| r.interpolated).collect();
+    assert!(!filled.is_empty(), "nothing filled");
+    assert_eq!(out["filled"].as_u64().unwrap() as usize, filled.len());
+    assert!(filled.iter().all(|r| r.mask.is_some()), "filled masks");
+    assert!(filled.iter().all(|r| (1..=frames).contains(&r.frame)));
+    // Every online record is still there, under its joined id, and nothing else changed.
+    assert_eq!(records.len(), online.len() + filled.len());
+    let observed: Vec<_> = records.iter().filter(|r| !r.interpolated).collect();
+    let mut by_key: std::collections::BTreeMap<(u32, String), usize> = Default::default();
+    for r in &online {
+        *by_key
+            .entry((r.frame, r.mask.as_ref().unwrap().counts.clone()))
+            .or_default() += 1;
+    }
+    for r in &observed {
+        let k = (r.frame, r.mask.as_ref().unwrap().counts.clone());
+        let n = by_key.get_mut(&k).expect("an online record");
+        *n -= 1;
+    }
+    assert!(by_key.values().all(|&n| n == 0));
+    // The joins are right, not just fewer ids: identity metrics improve against the truth.
+    let score = |res: &Vec<RecordJs>| -> serde_json::Value {
+        let v = evaluate(ts(js(&gt)), ts(js(res)), frames, None).unwrap();
+        serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
+    };
+    let (on, off) = (score(&online), score(&records));
+    assert!(
+        off["idsw"].as_u64() < on["idsw"].as_u64() && off["idf1"].as_f64() > on["idf1"].as_f64(),
+        "online {on}\noffline {off}"
+    );
+    assert!(
+        off["hota"].as_f64() >= on["hota"].as_f64(),
+        "online {on}\noffline {off}"
+    );
+    console_log!(
+        "occlusion scene, {frames} frames: ids {} online -> {} offline ({} joins, {} filled); \
+         IDSW {} -> {}, IDF1 {:.2} -> {:.2}, HOTA {:.2} -> {:.2}; finish {finish_ms:.0} ms",
+        ids(&online).len(),
+        final_ids.len(),
+        joins.len(),
+        filled.len(),
+        on["idsw"],
+        off["idsw"],
+        on["idf1"].as_f64().unwrap(),
+        off["idf1"].as_f64().unwrap(),
+        on["hota"].as_f64().unwrap(),
+        off["hota"].as_f64().unwrap(),
+    );
+
+    // Progress: phases in order, fractions in [0, 1] and growing within a phase, ending at
+    // "done" with 1.
+    let order = ["candidates", "appearance", "matching", "filling", "done"];
+    let reports: Vec<(usize, f64)> = log
+        .iter()
+        .map(|p| {
+            let p: serde_json::Value = serde_wasm_bindgen::from_value(p).unwrap();
+            let phase = p["phase"].as_str().unwrap().to_string();
+            let rank = order
+                .iter()
+                .position(|&o| o == phase)
+                .expect("a finish phase");
+            (rank, p["fraction"].as_f64().unwrap())
+        })
+        .collect();
+    assert!(reports.len() >= 5, "{reports:?}");
+    assert!(
+        reports
+            .windows(2)
+            .all(|w| w[0].0 < w[1].0 || (w[0].0 == w[1].0 && w[0].1 <= w[1].1)),
+        "{reports:?}"
+    );
+    assert!(reports.iter().all(|&(_, f)| (0.0..=1.0).contains(&f)));
+    assert_eq!(reports.last(), Some(&(4, 1.0)));
+    // With frames, the appearance phase ran (snapshots were taken during the online pass).
+    assert!(reports.iter().any(|&(r, _)| r == 1), "{reports:?}");
+    for rank in [0, 2, 3] {
+        assert!(
+            reports.iter().any(|&(r, _)| r == rank),
+            "no {}: {reports:?}",
+            order[rank]
+        );
+    }
+
+    // The tracker is final: tracks() is the result, no frame and no second finish.
+    assert!(tracker.finished());
+    assert_eq!(records_of(tracker.tracks().unwrap()), records);
+    let f = s.render(1, &mut buf).unwrap();
+    let msg = error_message(
+        tracker
+            .update(frames + 1, &buf, &f.detections())
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("finished"), "{msg}");
+    let msg = error_message(tracker.finish(None).err().unwrap());
+    assert!(msg.contains("finished"), "{msg}");
+}
+
+/// Boxes of one object moving right, hidden in frames 11..=16: two online tracks.
+fn broken_track(tracker: &mut Tracker) {
+    for n in 1..=30u32 {
+        let boxes = if (11..=16).contains(&n) {
+            serde_json::json!([])
+        } else {
+            serde_json::json!([{ "bbox": { "x": 10.0 + 8.0 * n as f64, "y": 50, "w": 30, "h": 60 }, "score": 0.95 }])
+        };
+        let d = Detections::from_lists(ts(js(&serde_json::json!({ "boxes": boxes })))).unwrap();
+        tracker.update_detections(n, &d).unwrap();
+    }
+}
+
+#[wasm_bindgen_test]
+fn a_throwing_progress_callback_is_an_error_and_leaves_the_tracker_usable() {
+    // The online tracker forgets a lost track after 3 frames, so the gap breaks it.
+    let online = serde_json::json!({ "max_lost": 3 });
+    let opts = serde_json::json!({ "fps": 25, "width": 640, "height": 480 });
+    let mut tracker = Tracker::new(Some(ts(js(&online))), Some(ts(js(&opts)))).unwrap();
+    broken_track(&mut tracker);
+    assert_eq!(
+        ids(&records_of(tracker.tracks().unwrap())).len(),
+        2,
+        "the gap breaks the track online"
+    );
+
+    let throws = js_sys::Function::new_with_args("p", "throw new Error('stop at ' + p.phase)");
+    let e = tracker
+        .finish(Some(JsValue::from(throws).unchecked_into()))
+        .err()
+        .unwrap();
+    let msg = error_message(e);
+    assert_eq!(msg, "progress callback threw: stop at candidates");
+    // A thrown non-Error value is reported too.
+    let throws = js_sys::Function::new_with_args("p", "throw 'plain string'");
+    let msg = error_message(
+        tracker
+            .finish(Some(JsValue::from(throws).unchecked_into()))
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("plain string"), "{msg}");
+    assert!(!tracker.finished());
+
+    // Nothing was lost: without a callback the pass runs and joins the two pieces.
+    let out = tracker.finish(None).unwrap();
+    let out: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(out)).unwrap();
+    let records: Vec<RecordJs> = serde_json::from_value(out["records"].clone()).unwrap();
+    assert_eq!(ids(&records).len(), 1, "{}", out["joins"]);
+    let filled: Vec<u32> = records
+        .iter()
+        .filter(|r| r.interpolated)
+        .map(|r| r.frame)
+        .collect();
+    assert_eq!(filled, (11..=16).collect::<Vec<_>>());
+    // Filled boxes lie on the line between the two ends.
+    for r in records.iter().filter(|r| r.interpolated) {
+        let want = 10.0 + 8.0 * r.frame as f64;
+        assert!(
+            (r.bbox.x - want).abs() < 1.0,
+            "frame {}: x {} vs {want}",
+            r.frame,
+            r.bbox.x
+        );
+    }
 }

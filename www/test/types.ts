@@ -17,7 +17,11 @@ import init, {
   writeAnnotations,
   type Annotations,
   type Format,
+  type JoinJs,
   type MaskBitmap,
+  type OfflineOptions,
+  type OfflineOutput,
+  type OfflineProgress,
   type RecordJs,
   type Records,
   type RleJs,
@@ -79,6 +83,32 @@ export async function usage(): Promise<string> {
   // @ts-expect-error: connectivity is 4 or 8
   new BackgroundDetector({ connectivity: 6 });
 
+  // The offline pass: a tracker built with offline options, then finish() with progress.
+  const opts: OfflineOptions = { fps: 25, relink: { solver: 'global', max_gap_seconds: 4 }, fill: { max_gap: 8, trajectory: 'linear' } };
+  const offline = new Tracker({ max_lost: 30 }, opts);
+  offline.update(1, frameBuf, dets);
+  const canFinish: boolean = offline.offline && !offline.finished;
+  const phases: Array<OfflineProgress['phase']> = [];
+  const out: OfflineOutput = offline.finish((p) => {
+    const f: number = p.fraction;
+    phases.push(p.phase);
+    if (f > 1) throw new Error('out of range');
+  });
+  offline.finish();
+  const join: JoinJs | undefined = out.joins[0];
+  const master: number = join?.master ?? 0;
+  const filled: boolean = out.records.some((r) => r.interpolated === true) && out.filled >= 0;
+  // @ts-expect-error: offline options need the frame rate
+  new Tracker({}, { relink: {} });
+  // @ts-expect-error: join solvers are a closed set
+  new Tracker({}, { fps: 25, relink: { solver: 'fastest' } });
+  // @ts-expect-error: unknown fill options are type errors
+  new Tracker({}, { fps: 25, fill: { max_gaps: 3 } });
+  // @ts-expect-error: the progress callback gets a progress report, not a number
+  offline.finish((p: number) => p);
+  // @ts-expect-error: phases are a closed set
+  const phase: OfflineProgress['phase'] = 'tracking';
+
   buf.free();
-  return `${n} ${state} ${hota} ` + `${version()} ${size} ${width} ${id} ${mask?.counts} ${text} ${data.length} ${wrong}`;
+  return `${n} ${state} ${hota} ${canFinish} ${phases} ${master} ${filled} ${phase} ` + `${version()} ${size} ${width} ${id} ${mask?.counts} ${text} ${data.length} ${wrong}`;
 }
