@@ -83,7 +83,7 @@ test('an image sequence is tracked, stepped and exported in every format', async
   await page.close();
 });
 
-test('offline mode tracks the whole sequence with a progress bar, then shows the result', async () => {
+test('offline mode tracks the whole sequence with a progress bar, then the offline pass', async (t) => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);
   await page.goto(`${server.url}?demo=0&mode=offline`);
@@ -101,12 +101,22 @@ test('offline mode tracks the whole sequence with a progress bar, then shows the
   const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   assert.equal(st.processed, FRAMES);
   assert.match(st.status, /tracks/);
-  // The progress bar went to the end and is put away.
+  // The offline pass ran on the real frames: it never adds identities, and what it filled in
+  // is in the table, flagged.
+  assert.ok(st.offline, 'the offline pass ran');
+  assert.ok(st.offline.ids <= st.offline.onlineIds);
+  const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  assert.equal(records.filter((/** @type {any} */ r) => r.interpolated).length, st.offline.filled);
+  t.diagnostic(
+    `VOT bag, ${FRAMES} frames: ids ${st.offline.onlineIds} online → ${st.offline.ids} offline ` +
+      `(${st.offline.joins} joins, ${st.offline.filled} filled); finish() ${st.offline.ms.toFixed(0)} ms`,
+  );
+  // The progress bar went to the end (frames, then the re-linker's phases) and is put away.
   const progress = await page.evaluate(() => {
     const p = /** @type {HTMLProgressElement} */ (document.getElementById('progress'));
-    return { hidden: p.hidden, value: p.value, max: p.max };
+    return { hidden: p.hidden, value: p.value, max: p.max, phase: p.dataset.phase };
   });
-  assert.deepEqual(progress, { hidden: true, value: FRAMES, max: FRAMES });
+  assert.deepEqual(progress, { hidden: true, value: 1, max: 1, phase: 'done' });
   assert.ok(!(await page.locator('#play .run').isVisible()), 'after the run the button plays');
   // Then it plays back what was tracked.
   await page.keyboard.press('Home');

@@ -26,6 +26,15 @@ import { FORMATS, guessFormat, exportName, formatInfo } from './io/formats.js';
 
 /** Redraw at most this often (ms) while tracking offline. */
 const OFFLINE_DRAW_MS = 250;
+/** Share of the offline progress bar taken by the online pass; the re-linker has the rest. */
+const ONLINE_SHARE = 0.9;
+/** The offline pass's phases after the online pass, in order, as the status line names them. */
+const PHASES = /** @type {const} */ ({
+  candidates: 'finding broken tracks',
+  appearance: 'comparing appearances',
+  matching: 'choosing joins',
+  filling: 'filling gaps',
+});
 /** Recompute scores at most this often (ms) while tracking. */
 const SCORE_MS = 500;
 
@@ -54,6 +63,15 @@ export class App {
     /** @type {'realtime' | 'max'} */
     this.speed = 'realtime';
     this.detector = 'background';
+    /** @type {import('../pkg/shapetrack.js').ScenePreset} the synthetic scene the demo opens */
+    this.scene = 'demo';
+    /** Whether the open session can run the offline pass (a source with an end). */
+    this.offlineCapable = false;
+    /**
+     * What the last offline pass did: ids before and after, joins, filled-in records, time.
+     * @type {{ onlineIds: number, ids: number, joins: number, filled: number, ms: number } | null}
+     */
+    this.offlineReport = null;
     /** @type {{ a: number | null, b: number | null }} */
     this.selection = { a: null, b: null };
     this.options = { masks: true, boxes: true, trails: true, gt: false };
@@ -119,13 +137,14 @@ export class App {
     if (this.source && this.source.kind !== 'synth') this.source.close();
     this.status(src ? `opening ${src.name}…` : 'starting the demo scene…');
     const opened = await this.worker.open({
-      source: src ? { kind: 'frames', width: src.width, height: src.height } : { kind: 'synth' },
+      source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: this.scene },
       detector: this.detector,
+      offline: src?.kind !== 'webcam',
     });
     /** @type {AnySource} */
     const source = src ?? {
       kind: 'synth',
-      name: 'demo',
+      name: this.scene,
       width: opened.width,
       height: opened.height,
       frames: opened.frames ?? 0,
@@ -139,6 +158,8 @@ export class App {
     this.cur = 0;
     this.processed = 0;
     this.finished = false;
+    this.offlineCapable = opened.offline;
+    this.offlineReport = null;
     this.selection = { a: null, b: null };
     this.fps.reset();
     this.model.replaceAll([]);
@@ -190,8 +211,11 @@ export class App {
   /** The play loop: replays what is tracked, tracks what is not, in the chosen mode. */
   async run() {
     if (this.mode === 'offline' && this.tracking && !this.finished) {
-      await this.runOffline();
-      return;
+      if (this.offlineCapable) {
+        await this.runOffline();
+        return;
+      }
+      this.status('offline mode needs a video or image sequence with an end: tracking online');
     }
     const t0 = performance.now();
     const f0 = this.cur;
@@ -219,22 +243,42 @@ export class App {
     if (wait > 1) await new Promise((r) => setTimeout(r, wait));
   }
 
-  /** Offline: track every remaining frame as fast as possible, then run the offline pass. */
+  /**
+   * Offline: track every remaining frame as fast as possible, then run the offline pass (the
+   * core's trajectory re-linker and gap filling) and apply what it changed to the table. The
+   * progress bar follows the frames, then the re-linker's phases.
+   */
   async runOffline() {
     const progress = byId('progress', HTMLProgressElement);
     progress.hidden = false;
-    progress.max = this.frames || 1;
+    progress.max = 1;
+    progress.dataset.phase = 'online';
     if (this.processed < (this.frames || 0)) {
       await this.track({ until: this.frames, display: 'throttled' });
     }
     if (!this.playing || (this.frames && this.processed < this.frames)) return;
     if (!this.finished) {
       this.status('offline pass…');
-      const { records, relinked } = await this.worker.finish();
-      this.model.replaceAll(records, { fromTracker: true });
+      const phases = Object.keys(PHASES);
+      const res = await this.worker.finish((p) => {
+        const i = phases.indexOf(p.phase);
+        const done = p.phase === 'done' ? 1 : (Math.max(0, i) + p.fraction) / phases.length;
+        progress.value = ONLINE_SHARE + (1 - ONLINE_SHARE) * done;
+        progress.dataset.phase = p.phase;
+        const name = PHASES[/** @type {keyof typeof PHASES} */ (p.phase)];
+        if (name) this.status(`offline pass: ${name}…`);
+      });
+      const onlineIds = this.model.table.ids().length;
+      const applied = this.model.relink({ joins: res.joins, filled: res.filled });
+      this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
       this.finished = true;
-      const n = this.model.table.ids().length;
-      this.status(relinked ? `offline pass done: ${n} tracks` : `whole video tracked: ${n} tracks (this core has no offline re-linker yet)`);
+      const ids = this.model.table.ids().length;
+      this.offlineReport = { onlineIds, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
+      const skipped = res.joins.length - applied.joined;
+      this.status(
+        `offline pass: ${onlineIds} → ${ids} tracks (${applied.joined} joins, ${applied.filled} shapes filled in, ` +
+          `${res.ms.toFixed(0)} ms)${skipped ? `; ${skipped} join(s) left to your edits` : ''}`,
+      );
     }
     await this.show(this.cur || 1);
   }
@@ -270,7 +314,7 @@ export class App {
         this.cur = res.frame;
         this.render();
       }
-      progress.value = res.frame;
+      progress.value = this.frames ? (ONLINE_SHARE * res.frame) / this.frames : 0;
       if (src.kind === 'webcam' && !this.playing) break;
     }
     if (display === 'throttled') {

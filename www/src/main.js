@@ -3,7 +3,8 @@
 // (`window.__shapetrack`).
 //
 // URL parameters: `?demo=0` does not start the demo on load; `?speed=max` tracks as fast as
-// possible instead of at the source's frame rate; `?mode=offline`.
+// possible instead of at the source's frame rate; `?mode=offline`; `?scene=occlusion` (or
+// `default`) opens another synthetic scene as the demo.
 
 import { loadCore } from './lib/core.js';
 import { App } from './app.js';
@@ -24,6 +25,8 @@ async function main() {
     app.speed = 'max';
     byId('speed', HTMLSelectElement).value = 'max';
   }
+  const scene = params.get('scene');
+  if (scene === 'demo' || scene === 'default' || scene === 'occlusion') app.scene = scene;
   if (params.get('mode') === 'offline') {
     app.mode = 'offline';
     byId('mode', HTMLSelectElement).value = 'offline';
@@ -68,6 +71,7 @@ function exposeForTests(app) {
       frames: app.frames,
       playing: app.playing,
       finished: app.finished,
+      offline: app.offlineReport,
       fps: app.fps.fps,
       timings: app.lastTimings,
       drawMs: app.renderMs,

@@ -27,6 +27,10 @@ test('table indexes by frame and id, and runs compress gaps', () => {
   assert.deepEqual(t.ids(), [2, 5]);
   assert.deepEqual(t.at(2).map((r) => r.id), [2, 5]);
   assert.deepEqual(t.runs(2), [[1, 2], [4, 4]]);
+  t.add({ ...rec(3, 2), interpolated: true });
+  assert.deepEqual(t.runs(2), [[1, 4]]);
+  assert.deepEqual(t.spans(2), [[1, 2, false], [3, 3, true], [4, 4, false]]);
+  t.remove(/** @type {any} */ (t.get(3, 2)));
   assert.deepEqual(t.span(2), [1, 4]);
   assert.equal(t.size, 4);
   assert.equal(t.lastFrame(), 4);
@@ -166,15 +170,89 @@ test('renumbering during tracking follows the tracker id, merges of two keep the
   assert.equal(m.table.get(2, 9)?.bbox.y, 1);
 });
 
-test('replaceAll from the offline pass keeps edits; an import starts afresh', () => {
+test('replaceAll (an import) starts afresh', () => {
   const m = new EditModel();
   m.ingest([rec(1, 1), rec(1, 2)]);
   m.merge(1, 2);
-  m.replaceAll([rec(1, 1), rec(2, 2)], { fromTracker: true });
-  assert.deepEqual(layout(m.table), { 1: [1, 2] });
-  assert.equal(m.canUndo, false);
   m.replaceAll([rec(1, 1), rec(2, 2)]);
   assert.deepEqual(layout(m.table), { 1: [1], 2: [2] });
+  assert.equal(m.canUndo, false);
+  assert.equal(m.resolve(2), 2, 'old aliases are gone');
+});
+
+/** Tracker output: each track id over the given frames. */
+function tracked(spec) {
+  const recs = [];
+  for (const [id, frames] of Object.entries(spec)) for (const f of frames) recs.push(rec(f, Number(id)));
+  return recs.sort((a, b) => a.frame - b.frame);
+}
+
+/** Filled-in records of tracker id `id` (the joined identity's) in `frames`. */
+const fill = (id, frames) => frames.map((f) => ({ ...rec(f, id), interpolated: true }));
+
+test('the offline pass joins tracks and fills gaps as one undoable edit', () => {
+  const m = new EditModel();
+  m.ingest(tracked({ 1: [1, 2, 3], 2: [7, 8, 9], 3: [1, 2, 3, 4, 5, 6, 7, 8, 9] }));
+  const online = layout(m.table);
+  const out = m.relink({ joins: [{ slave: 1, master: 2, master_first: 7 }], filled: fill(1, [4, 5, 6]) });
+  assert.deepEqual(out, { joined: 1, filled: 3 });
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7, 8, 9], 3: [1, 2, 3, 4, 5, 6, 7, 8, 9] });
+  assert.deepEqual(m.table.track(1).map((r) => !!r.interpolated), [false, false, false, true, true, true, false, false, false]);
+  assert.deepEqual(origin(m.table, 8, 1), { x: 80, y: 2, w: 5, h: 5 }, 'the joined records are the tracker\'s');
+  assert.equal(m.resolve(2), 1, 'later output of tracker 2 goes to 1');
+  // Edits work on the joined identity, and undo takes them back one by one, then the pass.
+  m.merge(1, 3);
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7, 8, 9] });
+  assert.equal(m.undo(), 'merge 3 into 1');
+  assert.equal(m.undo(), 'offline pass: 1 join(s), 3 filled');
+  assert.deepEqual(layout(m.table), online);
+  assert.equal(m.resolve(2), 2);
+  m.redo();
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7, 8, 9], 3: [1, 2, 3, 4, 5, 6, 7, 8, 9] });
+});
+
+test('the offline pass follows chains and fills every gap of one', () => {
+  const m = new EditModel();
+  m.ingest(tracked({ 1: [1, 2], 2: [5, 6], 3: [9, 10] }));
+  const joins = [
+    { slave: 2, master: 3, master_first: 9 },
+    { slave: 1, master: 2, master_first: 5 },
+  ];
+  assert.deepEqual(m.relink({ joins, filled: fill(1, [3, 4, 7, 8]) }), { joined: 2, filled: 4 });
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10] });
+});
+
+test('the labeller\'s edits win over the offline pass', () => {
+  const m = new EditModel();
+  m.ingest(tracked({ 1: [1, 2, 3], 2: [7, 8, 9], 4: [1, 2, 3], 5: [7, 8, 9], 6: [1, 2], 7: [6, 7] }));
+  m.reassign(2, 20); // the labeller says 2 is its own object
+  m.reassign(4, 40); // and names 4: its continuation joins it under that name
+  m.deleteTrack(6); // a false track: nothing is joined to it
+  const out = m.relink({
+    joins: [
+      { slave: 1, master: 2, master_first: 7 },
+      { slave: 4, master: 5, master_first: 7 },
+      { slave: 6, master: 7, master_first: 6 },
+    ],
+    filled: [...fill(1, [4, 5, 6]), ...fill(4, [4, 5, 6]), ...fill(6, [3, 4, 5])],
+  });
+  assert.deepEqual(out, { joined: 1, filled: 3 });
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3], 7: [6, 7], 20: [7, 8, 9], 40: [1, 2, 3, 4, 5, 6, 7, 8, 9] });
+  // A split track is the labeller's too.
+  const s = new EditModel();
+  s.ingest(tracked({ 1: [1, 2, 3], 2: [7, 8, 9, 10] }));
+  const fresh = s.split(2, 9);
+  assert.deepEqual(s.relink({ joins: [{ slave: 1, master: 2, master_first: 7 }], filled: fill(1, [4, 5, 6]) }), { joined: 0, filled: 0 });
+  assert.deepEqual(layout(s.table), { 1: [1, 2, 3], 2: [7, 8], [fresh]: [9, 10] });
+  assert.equal(s.undo(), `split 2 at frame 9 as ${fresh}`, 'a pass that changed nothing is not an edit');
+});
+
+test('the offline pass keeps a frame the labeller filled already', () => {
+  const m = new EditModel();
+  m.ingest(tracked({ 1: [1, 2, 3, 5], 2: [4] }));
+  m.merge(1, 2); // the labeller bridged the gap by hand
+  assert.deepEqual(m.relink({ joins: [], filled: fill(1, [4]) }), { joined: 0, filled: 0 });
+  assert.equal(m.table.get(4, 1)?.bbox.y, 2);
 });
 
 test('listeners hear every change', () => {

@@ -128,28 +128,122 @@ export class EditModel {
   }
 
   /**
-   * Replaces the whole table and clears the history (old patches refer to records that no
-   * longer exist).
+   * Replaces the whole table and clears the history (an import: old patches refer to records
+   * that no longer exist, and the new ids are not the tracker's).
    * @param {TrackRecord[]} records
-   * @param {{ fromTracker?: boolean }} [opts] true for the offline pass's result: the same
-   *   tracker's ids, so the aliases still apply; false for an import, which starts afresh
    */
-  replaceAll(records, { fromTracker = false } = {}) {
-    if (!fromTracker) {
-      this.aliases = new Map();
-      this.trackerIds = new Set();
-      this.labellerIds = new Set();
-    }
-    this.table = new TrackTable();
-    for (const r of records) {
-      const id = fromTracker ? this.resolve(r.id) : r.id;
-      if (id !== null) this.table.add(id === r.id ? r : withId(r, id));
-      if (fromTracker) this.trackerIds.add(r.id);
-    }
-    this.nextId = Math.max(fromTracker ? this.nextId : 1, this.table.maxId() + 1);
+  replaceAll(records) {
+    this.aliases = new Map();
+    this.trackerIds = new Set();
+    this.labellerIds = new Set();
+    this.table = new TrackTable(records);
+    this.nextId = this.table.maxId() + 1;
     this.undoStack = [];
     this.redoStack = [];
     this.emit();
+  }
+
+  /**
+   * Applies the tracker's offline pass (trajectory re-linking, gap filling) to the table, as
+   * one edit that undo takes back.
+   *
+   * The table already holds the online pass (ingested frame by frame) with the labeller's
+   * edits, and the offline pass changes nothing else: it says which tracks are one object
+   * (`joins`, tracker ids) and adds shapes in the gaps (`filled`, under the joined identity's
+   * tracker id). So instead of replacing the table, each join is applied like a merge of the
+   * later track into the earlier one, in time order, and the labeller's word wins:
+   * - a track the labeller edited by id (merged away, renumbered, split, swapped, deleted) is
+   *   not joined to anything: the labeller already said what it is;
+   * - a join to a track the labeller deleted is not made;
+   * - a track whose number was merged into, or renumbered, is joined under its shown number.
+   * A gap is filled only when the table shows one identity at both of its ends and nothing
+   * inside it.
+   * @param {{
+   *   joins: Array<{ slave: number, master: number, master_first: number }>,
+   *   filled: TrackRecord[],
+   * }} pass
+   * @returns {{ joined: number, filled: number }} what was applied
+   */
+  relink({ joins, filled }) {
+    const table = this.table;
+    /** @type {TrackRecord[]} */
+    const removed = [];
+    /** @type {Set<TrackRecord>} records this pass added (moved again: not an original) */
+    const added = new Set();
+    /** Shown id → shown id for tracks this pass moved. @type {Map<number, number>} */
+    const moved = new Map();
+    const follow = (/** @type {number | null} */ id) => {
+      for (let k = 0; id !== null && moved.has(id) && k <= moved.size; k++) id = /** @type {number} */ (moved.get(id));
+      return id;
+    };
+    const drop = (/** @type {TrackRecord} */ r) => {
+      table.remove(r);
+      if (added.has(r)) added.delete(r);
+      else removed.push(r);
+    };
+    const put = (/** @type {TrackRecord} */ r) => {
+      table.add(r);
+      added.add(r);
+    };
+
+    let joined = 0;
+    for (const j of [...joins].sort((a, b) => a.master_first - b.master_first)) {
+      if (this.aliases.has(j.master) || !table.has(j.master)) continue;
+      const from = j.master;
+      const to = follow(this.resolve(j.slave));
+      if (to === null || to === from) continue;
+      for (const r of table.track(from)) {
+        drop(r);
+        if (!table.get(r.frame, to)) put(withId(r, to));
+      }
+      moved.set(from, to);
+      joined++;
+    }
+
+    // Each filled run is one gap of one chain (root tracker id): its ends belong to the
+    // chain member that is current at that frame (members start where their join says).
+    /** @type {Map<number, Array<[number, number]>>} root → [first frame, member] by start */
+    const members = new Map();
+    const slaveOf = new Map(joins.map((j) => [j.master, j.slave]));
+    for (const j of joins) {
+      let root = j.master;
+      for (let k = 0; slaveOf.has(root) && k <= joins.length; k++) root = /** @type {number} */ (slaveOf.get(root));
+      const list = members.get(root) ?? [[-Infinity, root]];
+      list.push([j.master_first, j.master]);
+      members.set(root, list);
+    }
+    for (const list of members.values()) list.sort((a, b) => a[0] - b[0]);
+    const memberAt = (/** @type {number} */ root, /** @type {number} */ frame) => {
+      let m = root;
+      for (const [first, id] of members.get(root) ?? []) if (first <= frame) m = id;
+      return m;
+    };
+    let nFilled = 0;
+    const runs = [...filled].sort((a, b) => a.id - b.id || a.frame - b.frame);
+    for (let i = 0; i < runs.length; ) {
+      let k = i + 1;
+      while (k < runs.length && runs[k].id === runs[i].id && runs[k].frame === runs[k - 1].frame + 1) k++;
+      const run = runs.slice(i, k);
+      i = k;
+      const root = run[0].id;
+      const fa = run[0].frame - 1;
+      const fb = run[run.length - 1].frame + 1;
+      const id = follow(this.resolve(memberAt(root, fa)));
+      if (id === null || id !== follow(this.resolve(memberAt(root, fb)))) continue;
+      if (!table.get(fa, id) || !table.get(fb, id) || run.some((r) => table.get(r.frame, id))) continue;
+      for (const r of run) put(id === r.id ? r : withId(r, id));
+      nFilled += run.length;
+    }
+
+    // Undo the working changes, then record them as one edit (which applies them again).
+    for (const r of added) table.remove(r);
+    for (const r of removed) table.add(r);
+    if (joined || nFilled) {
+      // Future tracker output of a moved track goes where the track went, in one step.
+      const renames = new Map([...moved.keys()].map((id) => [id, follow(id)]));
+      this.commit(`offline pass: ${joined} join(s), ${nFilled} filled`, removed, [...added], renames);
+    }
+    return { joined, filled: nFilled };
   }
 
   /**

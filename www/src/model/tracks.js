@@ -120,6 +120,27 @@ export class TrackTable {
     return out;
   }
 
+  /**
+   * Like `runs`, but a run also ends where records switch between observed and filled in
+   * (`interpolated`): the timeline draws filled spans differently.
+   * @param {number} id
+   * @returns {Array<[number, number, boolean]>} inclusive [start, end, filled] triples
+   */
+  spans(id) {
+    const t = this.byId.get(id);
+    if (!t) return [];
+    const frames = [...t.keys()].sort((a, b) => a - b);
+    /** @type {Array<[number, number, boolean]>} */
+    const out = [];
+    for (const f of frames) {
+      const filled = !!t.get(f)?.interpolated;
+      const last = out[out.length - 1];
+      if (last && f === last[1] + 1 && last[2] === filled) last[1] = f;
+      else out.push([f, f, filled]);
+    }
+    return out;
+  }
+
   /** Largest frame number with a record (0 when empty). */
   lastFrame() {
     let hi = 0;

@@ -98,8 +98,10 @@ export class Panel {
       const facts = [
         ['frames', span ? `${span[0]}–${span[1]} (${recs.length})` : '–'],
         ['pieces', String(runs)],
-        ['here', here ? `${Math.round(here.bbox.w)}×${Math.round(here.bbox.h)} at ${Math.round(here.bbox.x)},${Math.round(here.bbox.y)}` : 'not in this frame'],
+        ['here', here ? `${Math.round(here.bbox.w)}×${Math.round(here.bbox.h)} at ${Math.round(here.bbox.x)},${Math.round(here.bbox.y)}${here.interpolated ? ', filled in' : ''}` : 'not in this frame'],
       ];
+      const filled = recs.filter((r) => r.interpolated).length;
+      if (filled) facts.splice(2, 0, ['filled in', `${filled} frame${filled === 1 ? '' : 's'} (offline pass)`]);
       this.facts.replaceChildren(...facts.flatMap(([k, v]) => [h('dt', {}, [k]), h('dd', {}, [v])]));
       const two = b !== null && table.has(b);
       this.buttons.merge.disabled = !two;

@@ -1,6 +1,7 @@
 // The stage: the video frame on one canvas (painted by the tracker worker) and the overlay
 // (masks, boxes, ids, trails) on a second one above it, drawn here; a selection change
-// redraws only the overlay.
+// redraws only the overlay. Shapes the offline pass filled in (interpolated) are drawn
+// dashed, with a fainter mask: they were inferred, not seen.
 
 import { colorOf } from '../lib/colors.js';
 
@@ -130,7 +131,7 @@ export class Stage {
       for (const r of records) {
         const m = this.mask(r);
         if (!m) continue;
-        ctx.globalAlpha = selected(r.id) ? 0.65 : anySelected ? 0.2 : 0.45;
+        ctx.globalAlpha = (selected(r.id) ? 0.65 : anySelected ? 0.2 : 0.45) * (r.interpolated ? 0.5 : 1);
         ctx.drawImage(m.canvas, m.bitmap.x, m.bitmap.y);
       }
       ctx.globalAlpha = 1;
@@ -152,11 +153,14 @@ export class Stage {
       const { css } = colorOf(r.id);
       const sel = selected(r.id);
       const b = r.bbox;
-      if (options.boxes || sel) {
+      // A filled-in shape always gets its dashed outline: that is what marks it.
+      if (options.boxes || sel || r.interpolated) {
         ctx.lineWidth = sel ? line * 2 : line;
         ctx.strokeStyle = css;
         ctx.globalAlpha = anySelected && !sel ? 0.5 : 1;
+        if (r.interpolated) ctx.setLineDash([(5 * dpr) / k, (4 * dpr) / k]);
         ctx.strokeRect(b.x, b.y, b.w, b.h);
+        ctx.setLineDash([]);
       }
       const name = r.class !== undefined && r.class >= 0 ? labels.find((l) => l.class === r.class)?.name : undefined;
       const label = `${r.id}${r.interpolated ? '*' : ''}${name ? ` ${name}` : ''}`;

@@ -1,7 +1,9 @@
 // The track timeline — the thesis' "two-dimensional barcode" (Fig. 36–40): one row per track
 // id, one column per frame, a bar wherever the track exists. Fragmented identities show as
 // broken rows, identity switches as bars that stop where another starts. Click a row to select
-// the track and jump to that frame; shift-click adds a second track (merge, swap).
+// the track and jump to that frame; shift-click adds a second track (merge, swap). Spans the
+// offline pass filled in (interpolated shapes) are hatched, so what was seen and what was
+// inferred stay apart.
 
 import { colorOf } from '../lib/colors.js';
 
@@ -31,6 +33,8 @@ export class Timeline {
     this.key = '';
     this.barsAt = 0;
     this.bars = document.createElement('canvas');
+    /** Hatch patterns for filled-in spans, by id and size. @type {Map<string, CanvasPattern | null>} */
+    this.hatches = new Map();
     /** @type {Parameters<Timeline['render']>[0] | null} */
     this.last = null;
     canvas.addEventListener('pointerdown', (e) => this.pick(e));
@@ -78,7 +82,8 @@ export class Timeline {
   /** @param {PointerEvent} e */
   hover(e) {
     const { id, frame } = this.locate(e);
-    this.canvas.title = id === null ? `frame ${frame}` : `track ${id} · frame ${frame}`;
+    const filled = id !== null && !!this.last?.table.get(frame, id)?.interpolated;
+    this.canvas.title = id === null ? `frame ${frame}` : `track ${id} · frame ${frame}${filled ? ' (filled in)' : ''}`;
   }
 
   /**
@@ -134,6 +139,38 @@ export class Timeline {
     ctx.fillRect(Math.round(x) - dpr / 2, 0, Math.max(1, dpr), canvas.height);
   }
 
+  /**
+   * Diagonal stripes in the track's colour over a faint wash of it.
+   * @param {CanvasRenderingContext2D} ctx
+   * @param {number} id
+   * @param {number} dpr
+   */
+  hatch(ctx, id, dpr) {
+    const n = Math.max(4, Math.round(5 * dpr));
+    const key = `${id}:${n}`;
+    let p = this.hatches.get(key);
+    if (p === undefined) {
+      const tile = document.createElement('canvas');
+      tile.width = tile.height = n;
+      const g = /** @type {CanvasRenderingContext2D} */ (tile.getContext('2d'));
+      const [r, gr, b] = colorOf(id).rgb;
+      g.fillStyle = `rgba(${r},${gr},${b},0.22)`;
+      g.fillRect(0, 0, n, n);
+      g.strokeStyle = colorOf(id).css;
+      g.lineWidth = Math.max(1, dpr * 1.2);
+      g.beginPath();
+      // The main diagonal and the two corner pieces: the tile repeats seamlessly.
+      for (const o of [-n, 0, n]) {
+        g.moveTo(o, n);
+        g.lineTo(o + n, 0);
+      }
+      g.stroke();
+      p = ctx.createPattern(tile, 'repeat');
+      this.hatches.set(key, p);
+    }
+    return p;
+  }
+
   /** @param {TrackTable} table */
   drawBars(table) {
     const { canvas } = this;
@@ -153,8 +190,9 @@ export class Timeline {
     for (let row = 0; row < rows && row + this.scroll < this.ids.length; row++) {
       const id = this.ids[row + this.scroll];
       const y = 2 + row * this.rowH;
-      ctx.fillStyle = colorOf(id).css;
-      for (const [a, b] of table.runs(id)) {
+      const solid = colorOf(id).css;
+      for (const [a, b, filled] of table.spans(id)) {
+        ctx.fillStyle = filled ? (this.hatch(ctx, id, dpr) ?? solid) : solid;
         // At least one device pixel wide, so a single-frame track is still visible.
         ctx.fillRect(GUTTER + (a - 1) * fw, y, Math.max(1, (b - a + 1) * fw), this.rowH - gap);
       }

@@ -2,25 +2,35 @@
 // one exactly once, with `{ id, ok: true, ...result }` or `{ id, ok: false, error }`, in the
 // order the requests were sent. Video frames travel as transferred ImageBitmaps (no copies).
 // The worker paints the page's frame canvas (handed over once with `attach`), so the page
-// only draws overlays: a tracked frame is painted just before its result is posted.
+// only draws overlays: a tracked frame is painted just before its result is posted. Only
+// `finish` sends messages before its answer: `{ id, progress }` reports of the offline pass.
 
 /**
  * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
  * @typedef {import('../../pkg/shapetrack.js').TrackerConfig} TrackerConfig
  * @typedef {import('../../pkg/shapetrack.js').ScenePreset} ScenePreset
  *
- * @typedef {{ kind: 'synth', preset?: ScenePreset } | { kind: 'frames', width: number, height: number }} SourceSpec
+ * @typedef {import('../../pkg/shapetrack.js').OfflineProgress} OfflineProgress
+ * @typedef {import('../../pkg/shapetrack.js').JoinJs} JoinJs
+ *
+ * @typedef {{ kind: 'synth', preset?: ScenePreset } | { kind: 'frames', width: number, height: number, fps: number }} SourceSpec
  *
  * @typedef {{
  *   source: SourceSpec,
  *   detector: string,
  *   tracker?: TrackerConfig,
  *   detectorOptions?: Record<string, unknown>,
- * }} OpenRequest
+ *   offline?: boolean,
+ * }} OpenRequest  `offline`: keep what the offline pass needs (a video or image sequence
+ *   with an end; not the webcam), so `finish` can run it
  *
- * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string, classes: string[] }} OpenResult
+ * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string, classes: string[], offline: boolean }} OpenResult
  *   `classes`: the detector's class names by class id (empty when it has none; an empty name
- *   is a class it never reports)
+ *   is a class it never reports); `offline`: whether `finish` can run the offline pass
+ *
+ * @typedef {{ joins: JoinJs[], filled: TrackRecord[], records: number, ids: number, ms: number }} FinishResult
+ *   what the offline pass changed: the joins (tracker ids) and the filled-in records; the
+ *   total of records and of ids after it, and the time it took in the worker
  *
  * @typedef {{ detect: number, track: number, total: number }} Timings milliseconds in the worker
  *
@@ -50,7 +60,7 @@ export class WorkerClient {
   constructor(worker) {
     this.worker = worker;
     this.nextId = 1;
-    /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void }>} */
+    /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void, onProgress?: (p: any) => void }>} */
     this.pending = new Map();
     worker.addEventListener('message', (e) => this.onMessage(e.data));
     worker.addEventListener('error', (e) => this.failAll(new Error(e.message || 'worker failed to load')));
@@ -61,6 +71,10 @@ export class WorkerClient {
   onMessage(msg) {
     const p = this.pending.get(msg.id);
     if (!p) return;
+    if (msg.progress) {
+      p.onProgress?.(msg.progress);
+      return;
+    }
     this.pending.delete(msg.id);
     if (msg.ok) p.resolve(msg);
     else p.reject(new Error(msg.error));
@@ -76,12 +90,13 @@ export class WorkerClient {
    * @template T
    * @param {Request} req
    * @param {Transferable[]} [transfer]
+   * @param {(p: any) => void} [onProgress] called with the progress reports sent before the answer
    * @returns {Promise<T>}
    */
-  request(req, transfer = []) {
+  request(req, transfer = [], onProgress) {
     const id = this.nextId++;
     return new Promise((resolve, reject) => {
-      this.pending.set(id, { resolve, reject });
+      this.pending.set(id, { resolve, reject, onProgress });
       this.worker.postMessage({ ...req, id }, transfer);
     });
   }
@@ -127,11 +142,13 @@ export class WorkerClient {
   }
 
   /**
-   * Ends an offline run: the offline pass over everything tracked, when the core has one.
-   * @returns {Promise<{ records: TrackRecord[], relinked: boolean }>}
+   * Ends an offline run: the offline pass (trajectory re-linking, gap filling) over everything
+   * tracked. The session must have been opened with `offline`.
+   * @param {(p: OfflineProgress) => void} [onProgress] the pass's progress, phase by phase
+   * @returns {Promise<FinishResult>}
    */
-  finish() {
-    return this.request({ type: 'finish' });
+  finish(onProgress) {
+    return this.request({ type: 'finish' }, [], onProgress);
   }
 
   terminate() {

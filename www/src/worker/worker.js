@@ -75,7 +75,7 @@ async function dispatch(req) {
     case 'render':
       return { result: render(req.frame), transfer: [] };
     case 'finish':
-      return { result: finish(), transfer: [] };
+      return { result: finish(req.id), transfer: [] };
     case 'tracks':
       return { result: { records: need().tracker.tracks() }, transfer: [] };
     case 'close':
@@ -123,7 +123,10 @@ async function open(req) {
   const buffer = new core.FrameBuffer(width, height);
   const detector = createDetector(req.detector, req.detectorOptions);
   await detector.init({ core, width, height });
-  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker });
+  if (req.source.kind === 'frames') fps = req.source.fps || fps;
+  // With an end to the video the tracker keeps what the offline pass needs (appearance
+  // snapshots), so the page may switch to offline at any time before the end.
+  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker }, req.offline ? { fps } : null);
   session = { core, memory, width, height, buffer, tracker, detector, scene, canvas: null, ctx2d: null };
   return {
     width,
@@ -133,6 +136,7 @@ async function open(req) {
     hasGroundTruth: scene !== null,
     version: core.version(),
     classes: detector.classes ?? [],
+    offline: tracker.offline,
   };
 }
 
@@ -248,17 +252,37 @@ async function step(frame, bitmap, display) {
   };
 }
 
+/** Progress reports are posted at most this often (ms), and at every change of phase. */
+const PROGRESS_MS = 50;
+
 /**
- * The end of an offline run: the offline pass (the core's trajectory re-linker, thesis ch. 5)
- * over everything tracked, when this build of the core has it; otherwise the online result
- * as it stands, marked as not re-linked so the page can say so.
- * @returns {{ records: import('../../pkg/shapetrack.js').Records, relinked: boolean }}
+ * The offline pass (the core's trajectory re-linker, thesis ch. 5) over everything tracked.
+ * Its progress goes to the page as `{ id, progress }` messages before the answer. The page
+ * already holds the online result, so only what the pass changed is sent back.
+ * @param {number} id the request's id
+ * @returns {import('./protocol.js').FinishResult}
  */
-function finish() {
-  const t = need().tracker;
-  const pass = /** @type {{ finish?: () => import('../../pkg/shapetrack.js').Records }} */ (/** @type {unknown} */ (t));
-  if (typeof pass.finish === 'function') return { records: pass.finish(), relinked: true };
-  return { records: t.tracks(), relinked: false };
+function finish(id) {
+  const s = need();
+  let phase = '';
+  let last = 0;
+  const t0 = performance.now();
+  const out = s.tracker.finish((progress) => {
+    const now = performance.now();
+    if (progress.phase === phase && progress.fraction < 1 && now - last < PROGRESS_MS) return;
+    phase = progress.phase;
+    last = now;
+    ctx.postMessage({ id, progress });
+  });
+  const ms = performance.now() - t0;
+  const ids = new Set(out.records.map((r) => r.id));
+  return {
+    joins: out.joins,
+    filled: out.records.filter((r) => r.interpolated),
+    records: out.records.length,
+    ids: ids.size,
+    ms,
+  };
 }
 
 /**
