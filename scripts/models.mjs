@@ -12,8 +12,10 @@
 //   (plain and SIMD) are served next to each other, as its loader expects.
 //
 // `ssdModel()` is the Vite plugin that serves all of it: the module `virtual:shapetrack-ssd`
-// (URLs + the tfjs-tflite functions) for the tracker worker; in a build the files are emitted
-// into the bundle, so the service worker precaches them with the rest of the app.
+// (URLs + the tfjs-tflite functions) for the tracker worker. In a build every file only the
+// SSD detector uses — the model, its labels, the TFLite runtime and the worker's chunk of
+// tfjs-tflite, ~19 MB — goes under `ssd/` (SSD_DIR): the service worker does not precache
+// that folder at install, it caches each file when the detector first fetches it.
 //
 //   node scripts/models.mjs             check the packages, print offsets, labels, hash, licence
 //   node scripts/models.mjs --out DIR   also write model.tflite and labels.txt into DIR
@@ -36,6 +38,8 @@ export const MODEL_SHA256 = 'd0a5255bf8c4f5a0bc4240741a76c41d5e939f7655078f945f5
 export const NUM_CLASSES = 24;
 /** The TFLite runtime builds served: the threaded ones need a cross-origin isolated page. */
 export const RUNTIME_FILES = ['tflite_web_api_cc.js', 'tflite_web_api_cc.wasm', 'tflite_web_api_cc_simd.js', 'tflite_web_api_cc_simd.wasm'];
+/** The build folder of everything only the SSD detector loads (cached on first use, not precached). */
+export const SSD_DIR = 'ssd/';
 /** tfjs-tflite's ES module build (its `module` entry imports a file the package lacks). */
 export const TFLITE_ENTRY = '@tensorflow/tfjs-tflite/dist/tf-tflite.fesm.js';
 
@@ -114,7 +118,7 @@ const DEV_PREFIX = '/@shapetrack-ssd/';
  * Use one instance in `plugins` (dev server) and one with `{ worker: true }` in
  * `worker.plugins`. In a build only the worker's instance emits the files and loads tfjs-tflite;
  * the page's copy of the module is a stub (the page lists the detector, never runs it), so the
- * runtime is bundled and precached once.
+ * runtime is bundled once, under SSD_DIR with the rest.
  * @param {{ worker?: boolean }} [opts]
  * @returns {import('vite').Plugin}
  */
@@ -130,6 +134,20 @@ export function ssdModel({ worker = false } = {}) {
     },
     resolveId(id) {
       return id === VIRTUAL ? RESOLVED : null;
+    },
+    // The worker's chunk of this module (tfjs-tflite and tfjs-core, ~1.3 MB) goes with the
+    // other SSD files.
+    outputOptions(opts) {
+      if (!worker || command !== 'build') return null;
+      const given = opts.chunkFileNames;
+      return {
+        ...opts,
+        chunkFileNames: (chunk) => {
+          if (chunk.facadeModuleId === RESOLVED) return `${SSD_DIR}runtime-[hash].js`;
+          if (typeof given === 'function') return given(chunk);
+          return given ?? 'assets/[name]-[hash].js';
+        },
+      };
     },
     // tfjs-tflite's Closure bundle carries a `goog.loadModuleFromSource` with a direct eval it
     // never reaches here; the bundler's warning about it is noise.
@@ -156,11 +174,12 @@ export function ssdModel({ worker = false } = {}) {
         );
       }
       const s = load();
-      const model = this.emitFile({ type: 'asset', name: 'ssd-mobilenetv2-oidv4.tflite', source: s.model });
-      const labels = this.emitFile({ type: 'asset', name: 'ssd-oidv4-labels.txt', source: s.labelsText });
+      const short = (/** @type {Uint8Array | string} */ b) => createHash('sha256').update(b).digest('hex').slice(0, 10);
+      const model = this.emitFile({ type: 'asset', fileName: `${SSD_DIR}ssd-mobilenetv2-oidv4-${short(s.model)}.tflite`, source: s.model });
+      const labels = this.emitFile({ type: 'asset', fileName: `${SSD_DIR}ssd-oidv4-labels-${short(s.labelsText)}.txt`, source: s.labelsText });
       // Fixed names in one folder: the runtime's loader builds the file names itself.
       const runtime = RUNTIME_FILES.map((f) =>
-        this.emitFile({ type: 'asset', fileName: `tflite/${f}`, source: readFileSync(join(TFLITE, 'wasm', f)) }),
+        this.emitFile({ type: 'asset', fileName: `${SSD_DIR}tflite/${f}`, source: readFileSync(join(TFLITE, 'wasm', f)) }),
       );
       return (
         api +

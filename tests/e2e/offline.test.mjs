@@ -1,10 +1,11 @@
 // Offline: after one visit the service worker serves the whole app (shell, JS, worker, wasm)
 // with the network off, and the app still works: it imports, draws masks and exports through
-// the wasm core. MOTS masks also round-trip byte for byte.
+// the wasm core. MOTS masks also round-trip byte for byte. The install precaches the app, not the
+// SSD detector's 19 MB (cached on first use instead, see ssd.test.mjs).
 
 import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readFileSync } from 'node:fs';
+import { mkdirSync, readFileSync, readdirSync, statSync } from 'node:fs';
 import { join } from 'node:path';
 import { DIST, OUT, launch, serve, watchErrors } from './harness.mjs';
 
@@ -132,6 +133,26 @@ test('after one visit the app loads, imports, draws and exports with the network
   }
   assert.deepEqual(errors, []);
   await page.close();
+});
+
+test('the install precaches the app shell and the wasm, not the SSD detector\'s files', () => {
+  const code = readFileSync(join(DIST, 'sw.js'), 'utf8');
+  const list = (/** @type {string} */ name) => {
+    const m = new RegExp(`const ${name} = .*?JSON\\.parse\\((".*?")\\)`).exec(code);
+    assert.ok(m, `${name} in sw.js`);
+    return /** @type {string[]} */ (JSON.parse(JSON.parse(m[1])));
+  };
+  const precache = list('PRECACHE');
+  assert.deepEqual(list('LAZY'), ['ssd/']);
+  for (const want of [/^\.\/$/, /^assets\/index-.+\.js$/, /^assets\/worker-.+\.js$/, /^assets\/shapetrack_bg-.+\.wasm$/]) {
+    assert.ok(precache.some((f) => want.test(f)), `${want} precached: ${precache}`);
+  }
+  assert.ok(!precache.some((f) => f.startsWith('ssd/') || f.endsWith('.tflite') || f.includes('tflite_web_api')), `${precache}`);
+  // The build does have the SSD files, under ssd/: left out, not missing.
+  const ssd = readdirSync(join(DIST, 'ssd'), { recursive: true }).map(String);
+  assert.ok(ssd.some((f) => f.endsWith('.tflite')) && ssd.some((f) => f.endsWith('.wasm')), `${ssd}`);
+  const bytes = precache.filter((f) => f !== './').reduce((n, f) => n + statSync(join(DIST, f)).size, 0);
+  assert.ok(bytes < 3_000_000, `install downloads ${bytes} bytes`);
 });
 
 test('no request left localhost', () => {

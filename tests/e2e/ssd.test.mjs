@@ -2,7 +2,8 @@
 // wasm runtime in the tracker worker) on a real sequence: DAVIS-2016 car-shadow, 40 JPEG frames
 // of a car filmed by a panning camera. The model comes from the local build only; the car is
 // detected as "Car" where the ground-truth mask is, on most frames, and tracked with one id.
-// Then, with the network off, the service worker serves the model and the runtime again.
+// The model and runtime are not precached at install: the service worker caches them the first
+// time the detector fetches them, and serves them again with the network off.
 
 import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -181,43 +182,94 @@ test('the SSD detector finds the DAVIS car on most frames and the tracker keeps 
   await page.close();
 });
 
-test('with the network off the service worker serves the model and the runtime', async () => {
-  const page = await browser.context.newPage();
-  const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0&speed=max`);
-  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
-  await page.evaluate(async () => {
-    await navigator.serviceWorker.ready;
-    if (!navigator.serviceWorker.controller) {
-      await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
+/**
+ * Every cache of the page's origin: cache name → request paths.
+ * @param {import('playwright-core').Page} page
+ * @returns {Promise<Record<string, string[]>>}
+ */
+function cacheListing(page) {
+  return page.evaluate(async () => {
+    /** @type {Record<string, string[]>} */
+    const out = {};
+    for (const name of await caches.keys()) {
+      const c = await caches.open(name);
+      out[name] = (await c.keys()).map((r) => new URL(r.url).pathname);
     }
+    return out;
   });
-  const served = server.log.length;
-  await browser.context.setOffline(true);
+}
+
+/**
+ * Picks the SSD detector (moving camera), tracks the first `n` frames and returns the number
+ * of detections per frame.
+ * @param {import('playwright-core').Page} page
+ * @param {number} n enough frames for the tracker to confirm a track (min_hits)
+ */
+async function runSsd(page, n) {
+  await page.selectOption('#detector', 'ssd-moving');
+  await recordTimings(page);
+  await page.setInputFiles('#file-images', frames().slice(0, n));
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1, undefined, { timeout: 120_000 });
+  await page.keyboard.press('Space');
+  await page.waitForFunction((k) => /** @type {any} */ (window).__shapetrack.state().processed === k, n, { timeout: 120_000 });
+  const timings = await page.evaluate(() => /** @type {any} */ (window).__timings);
+  const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  return { detections: timings.map((/** @type {any} */ x) => x.detections), car: records.some((/** @type {any} */ r) => r.class === 23) };
+}
+
+test('the SSD files are cached on first use, not at install; then the detector works offline', async () => {
+  // A fresh profile: a first visit, with nothing cached yet.
+  const fresh = await launch();
   try {
-    await page.reload();
+    const page = await fresh.context.newPage();
+    const errors = watchErrors(page);
+    const start = server.log.length;
+    const log = () => server.log.slice(start);
+    await page.goto(`${server.url}?demo=0&speed=max`);
     await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
-    await page.selectOption('#detector', 'ssd-moving');
-    await recordTimings(page);
-    // Enough frames for the tracker to confirm a track (min_hits).
-    const n = 8;
-    await page.setInputFiles('#file-images', frames().slice(0, n));
-    await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1, undefined, { timeout: 120_000 });
-    await page.keyboard.press('Space');
-    await page.waitForFunction((k) => /** @type {any} */ (window).__shapetrack.state().processed === k, n, { timeout: 120_000 });
-    const timings = await page.evaluate(() => /** @type {any} */ (window).__timings);
-    assert.ok(
-      timings.every((/** @type {any} */ x) => x.detections >= 1),
-      `detections every frame: ${timings.map((/** @type {any} */ x) => x.detections)}`,
-    );
-    const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
-    assert.ok(records.some((/** @type {any} */ r) => r.class === 23), 'the car is detected offline');
-    assert.equal(server.log.length, served, `nothing reached the server while offline: ${server.log.slice(served)}`);
+    await page.evaluate(async () => {
+      await navigator.serviceWorker.ready;
+      if (!navigator.serviceWorker.controller) {
+        await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
+      }
+    });
+    // The install precached the app and its wasm, and nothing of the SSD detector.
+    const installed = Object.values(await cacheListing(page)).flat();
+    assert.ok(installed.some((p) => p.endsWith('.wasm') && p.includes('shapetrack_bg')), `the core wasm is precached: ${installed}`);
+    assert.ok(!installed.some((p) => p.includes('/ssd/') || p.endsWith('.tflite')), `no SSD file at install: ${installed}`);
+    assert.ok(!log().some((p) => p.startsWith('/ssd/')), `the first visit fetched no SSD file: ${log()}`);
+
+    // Used once online: its files are fetched, once each, and cached.
+    const first = await runSsd(page, 8);
+    assert.ok(first.detections.every((d) => d >= 1), `detections every frame: ${first.detections}`);
+    const cached = Object.entries(await cacheListing(page)).filter(([name]) => name.startsWith('shapetrack-lazy-'));
+    assert.equal(cached.length, 1, 'one cache for the SSD files');
+    const lazy = cached[0][1];
+    for (const want of [/\/ssd\/ssd-mobilenetv2-oidv4-[0-9a-f]+\.tflite$/, /\/ssd\/ssd-oidv4-labels-[0-9a-f]+\.txt$/, /\/ssd\/runtime-.+\.js$/, /\/ssd\/tflite\/tflite_web_api_cc(_simd)?\.wasm$/]) {
+      assert.ok(lazy.some((p) => want.test(p)), `${want} cached: ${lazy}`);
+    }
+    const fetched = log().filter((p) => p.startsWith('/ssd/'));
+    assert.equal(new Set(fetched).size, fetched.length, `each SSD file fetched once: ${fetched}`);
+
+    // With the network off, a reload serves the app and the detector from the caches.
+    const served = server.log.length;
+    await fresh.context.setOffline(true);
+    try {
+      await page.reload();
+      await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+      const again = await runSsd(page, 8);
+      assert.ok(again.detections.every((d) => d >= 1), `detections every frame offline: ${again.detections}`);
+      assert.ok(again.car, 'the car is detected offline');
+      assert.equal(server.log.length, served, `nothing reached the server while offline: ${server.log.slice(served)}`);
+    } finally {
+      await fresh.context.setOffline(false);
+    }
+    assert.deepEqual(errors, []);
+    assert.deepEqual(fresh.foreign, []);
+    await page.close();
   } finally {
-    await browser.context.setOffline(false);
+    await fresh.close();
   }
-  assert.deepEqual(errors, []);
-  await page.close();
 });
 
 test('no request left localhost', () => {

