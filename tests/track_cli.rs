@@ -63,9 +63,20 @@ fn flag_errors_are_reported_not_panicked() {
     let dir = scratch("cli_errors");
     let det = data("mot15-train/TUD-Campus/det/det.txt");
     let out = dir.join("x.txt");
-    let o = track(&["--det", s(&det), "--out", s(&out), "--offline"]);
+    // The offline pass exists now (tests/offline_cli.rs); its config is checked like --config.
+    let bad_offline = dir.join("bad_offline.json");
+    std::fs::write(&bad_offline, r#"{"relink": {"max_slave": 3}}"#).unwrap();
+    let o = track(&[
+        "--det",
+        s(&det),
+        "--out",
+        s(&out),
+        "--offline",
+        "--offline-config",
+        s(&bad_offline),
+    ]);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("offline pass"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("max_slave"));
 
     let cfg = dir.join("bad.json");
     std::fs::write(&cfg, r#"{"max_lots": 3}"#).unwrap();

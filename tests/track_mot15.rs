@@ -141,7 +141,11 @@ fn online_box_mode_beats_the_peers_on_mot15() {
         c.hota, c.idf1, c.mota, c.idsw
     );
     assert!(c.hota >= 36.7, "combined HOTA {:.3} < 36.7", c.hota);
-    assert!(c.hota >= 39.0, "combined HOTA {:.3} regressed below 39.0", c.hota);
+    assert!(
+        c.hota >= 39.0,
+        "combined HOTA {:.3} regressed below 39.0",
+        c.hota
+    );
     assert!(
         c.idf1 > 47.456,
         "combined IDF1 {:.3} not above SORT's",

@@ -6,10 +6,9 @@
 //! taken as flat (`GT_ROOT/<seq>/...`), and without a seqmap every sub-folder that has
 //! `gt/gt.txt` is a sequence, in name order.
 
-use super::motchallenge::{parse_mots, SeqInfo};
-use super::{read_text, IoError, Record, RecordFlags};
+use super::motchallenge::{parse_mot_with, parse_mots, MotReadOptions, SeqInfo};
+use super::{read_text, IoError, Record};
 use crate::eval::{Origin, SequenceInput};
-use crate::frame::BBox;
 use std::path::{Path, PathBuf};
 
 /// One ground-truth sequence found on disk.
@@ -158,99 +157,17 @@ pub fn record_lines(text: &str) -> Vec<usize> {
         .collect()
 }
 
-fn field_num(file: &str, line: usize, col: usize, s: &str, what: &str) -> Result<f64, IoError> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(IoError::parse(
-            file,
-            line,
-            col,
-            format!("{what} (a finite number)"),
-            s,
-        )),
-    }
-}
-
-fn field_int(file: &str, line: usize, col: usize, s: &str, what: &str) -> Result<i64, IoError> {
-    if let Ok(v) = s.parse::<i64>() {
-        return Ok(v);
-    }
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v.fract() == 0.0 && v.abs() < 9.0e15 => Ok(v as i64),
-        _ => Err(IoError::parse(
-            file,
-            line,
-            col,
-            format!("{what} (an integer)"),
-            s,
-        )),
-    }
-}
-
 /// Parses MOTChallenge txt as TrackEval reads it. Unlike
 /// [`parse_mot`](super::motchallenge::parse_mot) it accepts negative box sizes (real trackers
 /// write them; TrackEval scores such a box with IoU 0) and frame 0 (so that evaluation can report
 /// it as an invalid timestep, as TrackEval does). Missing confidence is 1, class and
 /// visibility -1.
 pub fn parse_mot_as_trackeval(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
-    let mut out = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let ln = i + 1;
-        let line = raw.trim_end_matches('\r').trim();
-        if line.is_empty() {
-            continue;
-        }
-        let mut f: Vec<&str> = if line.contains(',') {
-            line.split(',').map(str::trim).collect()
-        } else {
-            line.split_whitespace().collect()
-        };
-        while f.last().is_some_and(|s| s.is_empty()) {
-            f.pop();
-        }
-        if f.len() < 6 {
-            return Err(IoError::parse(
-                file,
-                ln,
-                f.len() + 1,
-                "at least 6 fields: frame,id,x,y,w,h[,conf,...]",
-                line,
-            ));
-        }
-        let frame = field_int(file, ln, 1, f[0], "frame number")?;
-        if !(0..=u32::MAX as i64).contains(&frame) {
-            return Err(IoError::parse(file, ln, 1, "frame number ≥ 1", f[0]));
-        }
-        let id = field_int(file, ln, 2, f[1], "track id")?;
-        let x = field_num(file, ln, 3, f[2], "box left")?;
-        let y = field_num(file, ln, 4, f[3], "box top")?;
-        let w = field_num(file, ln, 5, f[4], "box width")?;
-        let h = field_num(file, ln, 6, f[5], "box height")?;
-        let score = match f.get(6) {
-            Some(s) => field_num(file, ln, 7, s, "confidence")?,
-            None => 1.0,
-        };
-        let class = match f.get(7) {
-            // TrackEval reads the class with astype(int): truncation.
-            Some(s) => field_num(file, ln, 8, s, "class")?.trunc() as i32,
-            None => -1,
-        };
-        let visibility = match f.get(8) {
-            Some(s) => field_num(file, ln, 9, s, "visibility")?,
-            None => -1.0,
-        };
-        out.push(Record {
-            frame: frame as u32,
-            id,
-            bbox: BBox::new(x, y, w, h),
-            score,
-            class,
-            visibility,
-            mask: None,
-            flags: RecordFlags::default(),
-        });
-    }
-    Ok(out)
+    let opts = MotReadOptions {
+        allow_negative_size: true,
+        allow_frame_zero: true,
+    };
+    parse_mot_with(text, file, opts)
 }
 
 /// Which file format to read.

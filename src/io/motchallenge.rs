@@ -53,11 +53,31 @@ fn int(file: &str, line: usize, col: usize, s: &str, what: &str) -> Result<i64, 
     }
 }
 
+/// How strictly [`parse_mot_with`] checks values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MotReadOptions {
+    /// Accept negative box sizes. Real trackers write them and TrackEval scores such a box with
+    /// IoU 0, so the evaluator must read them; the tracker's inputs must not have them.
+    pub allow_negative_size: bool,
+    /// Accept frame 0, so that evaluation can report it as an invalid timestep as TrackEval does.
+    pub allow_frame_zero: bool,
+}
+
 /// Parses a MOTChallenge txt file (gt, det or results). `file` names it in errors.
 ///
 /// Needs at least 6 fields per line; missing confidence defaults to 1, missing class and
 /// visibility to -1. Frames must be ≥ 1 and sizes non-negative.
 pub fn parse_mot(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
+    parse_mot_with(text, file, MotReadOptions::default())
+}
+
+/// [`parse_mot`] with the strictness of `opts`. The class column is truncated to an integer
+/// (TrackEval reads it with `astype(int)`).
+pub fn parse_mot_with(
+    text: &str,
+    file: &str,
+    opts: MotReadOptions,
+) -> Result<Vec<Record>, IoError> {
     let mut out = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let ln = i + 1;
@@ -76,7 +96,8 @@ pub fn parse_mot(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
             ));
         }
         let frame = int(file, ln, 1, f[0], "frame number")?;
-        if frame < 1 || frame > u32::MAX as i64 {
+        let first = if opts.allow_frame_zero { 0 } else { 1 };
+        if frame < first || frame > u32::MAX as i64 {
             return Err(IoError::parse(file, ln, 1, "frame number ≥ 1", f[0]));
         }
         let id = int(file, ln, 2, f[1], "track id")?;
@@ -84,10 +105,10 @@ pub fn parse_mot(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
         let y = num(file, ln, 4, f[3], "box top")?;
         let w = num(file, ln, 5, f[4], "box width")?;
         let h = num(file, ln, 6, f[5], "box height")?;
-        if w < 0.0 {
+        if w < 0.0 && !opts.allow_negative_size {
             return Err(IoError::parse(file, ln, 5, "box width ≥ 0", f[4]));
         }
-        if h < 0.0 {
+        if h < 0.0 && !opts.allow_negative_size {
             return Err(IoError::parse(file, ln, 6, "box height ≥ 0", f[5]));
         }
         let score = match f.get(6) {

@@ -90,19 +90,38 @@ impl Rle {
     }
 
     /// Encodes a [`Mask`] placed in an image of `width × height` (parts outside are clipped).
+    ///
+    /// Columns outside the mask's rectangle become single runs, so the cost is proportional to
+    /// the image width plus the mask's area, not to the image's area (this runs for every shape
+    /// of every exported frame).
     pub fn from_mask(mask: &Mask, width: u32, height: u32) -> Rle {
         let mut counts = Vec::new();
         let (mut prev, mut run) = (false, 0u32);
-        for x in 0..width as i32 {
-            for y in 0..height as i32 {
-                let v = mask.get(x, y);
-                if v != prev {
-                    counts.push(run);
-                    run = 0;
-                    prev = v;
-                }
-                run += 1;
+        let mut push = |v: bool, n: u32, prev: &mut bool, run: &mut u32| {
+            if n == 0 {
+                return;
             }
+            if v != *prev {
+                counts.push(*run);
+                *run = 0;
+                *prev = v;
+            }
+            *run += n;
+        };
+        let (w, h) = (width as i64, height as i64);
+        let (mx0, my0) = (mask.x() as i64, mask.y() as i64);
+        let (mx1, my1) = (mx0 + mask.width() as i64, my0 + mask.height() as i64);
+        let (ya, yb) = (my0.clamp(0, h), my1.clamp(0, h));
+        for x in 0..w {
+            if x < mx0 || x >= mx1 || ya >= yb {
+                push(false, height, &mut prev, &mut run);
+                continue;
+            }
+            push(false, ya as u32, &mut prev, &mut run);
+            for y in ya..yb {
+                push(mask.get(x as i32, y as i32), 1, &mut prev, &mut run);
+            }
+            push(false, (h - yb) as u32, &mut prev, &mut run);
         }
         counts.push(run);
         Rle {
@@ -140,10 +159,56 @@ impl Rle {
         out
     }
 
-    /// Decodes to a [`Mask`] cropped to its foreground.
+    /// Decodes to a [`Mask`] cropped to its foreground, without a full-image bitmap: the web
+    /// app decodes every shape of every frame it draws, and a 1280×720 scratch image per shape
+    /// would cost more than the drawing. O(runs + mask area).
     pub fn to_mask(&self) -> Mask {
-        // The decoded bitmap always has width·height entries, so this cannot fail.
-        Mask::from_full(self.width, self.height, &self.decode()).unwrap_or_else(|_| Mask::empty())
+        let h = self.height as u64;
+        if h == 0 || self.width == 0 {
+            return Mask::empty();
+        }
+        let total = h * self.width as u64;
+        // Pass 1: the foreground's bounding rectangle, from the runs alone.
+        let (mut x0, mut y0, mut x1, mut y1) = (u64::MAX, u64::MAX, 0u64, 0u64);
+        let mut pos = 0u64;
+        for (i, &c) in self.counts.iter().enumerate() {
+            let end = (pos + c as u64).min(total);
+            if i % 2 == 1 && end > pos {
+                let (xa, xb) = (pos / h, (end - 1) / h);
+                x0 = x0.min(xa);
+                x1 = x1.max(xb);
+                // A run spanning several columns covers the bottom of the first, the top of the
+                // last, and every row of those in between.
+                if xb > xa {
+                    y0 = 0;
+                    y1 = h - 1;
+                } else {
+                    y0 = y0.min(pos % h);
+                    y1 = y1.max((end - 1) % h);
+                }
+            }
+            pos = end;
+        }
+        if x0 == u64::MAX {
+            return Mask::empty();
+        }
+        let (w, hh) = (x1 - x0 + 1, y1 - y0 + 1);
+        let mut data = vec![0u8; (w * hh) as usize];
+        // Pass 2: fill the runs, column by column (inside the rectangle by construction).
+        let mut pos = 0u64;
+        for (i, &c) in self.counts.iter().enumerate() {
+            let end = (pos + c as u64).min(total);
+            if i % 2 == 1 {
+                for p in pos..end {
+                    let (x, y) = (p / h - x0, p % h - y0);
+                    if let Some(v) = data.get_mut((y * w + x) as usize) {
+                        *v = 1;
+                    }
+                }
+            }
+            pos = end;
+        }
+        Mask::new(x0 as i32, y0 as i32, w as u32, hh as u32, data).unwrap_or_else(|_| Mask::empty())
     }
 
     /// Number of foreground pixels.
@@ -330,6 +395,64 @@ mod tests {
         assert_eq!(back.area(), 200 * 350);
         let mask = back.to_mask();
         assert_eq!(Rle::from_mask(&mask, w, h), rle);
+    }
+
+    /// The straightforward encoder: every image pixel, column by column.
+    fn from_mask_per_pixel(mask: &Mask, width: u32, height: u32) -> Rle {
+        let mut full = vec![0u8; (width * height) as usize];
+        for (x, y) in mask.pixels() {
+            if x >= 0 && y >= 0 && (x as u32) < width && (y as u32) < height {
+                full[y as usize * width as usize + x as usize] = 1;
+            }
+        }
+        Rle::encode(width, height, &full).unwrap()
+    }
+
+    #[test]
+    fn from_mask_equals_per_pixel_encoding() {
+        let bits: Vec<u8> = (0..12 * 9)
+            .map(|i| ((i * 7 + i / 5) % 3 == 0) as u8)
+            .collect();
+        let m = Mask::new(0, 0, 12, 9, bits).unwrap();
+        // Inside, touching each border, partly and wholly outside the image.
+        for (dx, dy) in [
+            (3, 2),
+            (0, 0),
+            (28, 21),
+            (-5, -4),
+            (35, 3),
+            (3, 40),
+            (-20, 0),
+        ] {
+            let mm = m.translated(dx, dy);
+            assert_eq!(
+                Rle::from_mask(&mm, 40, 30),
+                from_mask_per_pixel(&mm, 40, 30),
+                "{dx},{dy}"
+            );
+        }
+        assert_eq!(Rle::from_mask(&Mask::empty(), 5, 4), Rle::empty(5, 4));
+    }
+
+    #[test]
+    fn to_mask_equals_full_bitmap_decoding() {
+        let bits: Vec<u8> = (0..12 * 9)
+            .map(|i| ((i * 5 + i / 7) % 4 == 0) as u8)
+            .collect();
+        let m = Mask::new(0, 0, 12, 9, bits).unwrap();
+        for (dx, dy) in [(3, 2), (0, 0), (28, 21), (-5, -4), (35, 3), (-20, 0)] {
+            let rle = Rle::from_mask(&m.translated(dx, dy), 40, 30);
+            let full = Mask::from_full(40, 30, &rle.decode()).unwrap();
+            assert_eq!(rle.to_mask(), full, "{dx},{dy}");
+        }
+        // A run crossing a column boundary: bottom of column 0 and top of column 1.
+        let rle = Rle {
+            height: 4,
+            width: 3,
+            counts: vec![3, 2, 7],
+        };
+        assert_eq!(rle.to_mask(), Mask::from_full(3, 4, &rle.decode()).unwrap());
+        assert!(Rle::empty(3, 4).to_mask().is_empty());
     }
 
     #[test]

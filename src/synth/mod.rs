@@ -629,7 +629,7 @@ impl SynthFrame {
                 score: 1.0,
                 class: 1,
                 visibility: g.visibility,
-                mask: Some(rle_of(&g.mask, self.width, self.height)),
+                mask: Some(Rle::from_mask(&g.mask, self.width, self.height)),
                 flags: RecordFlags::default(),
             })
             .collect()
@@ -646,7 +646,10 @@ impl SynthFrame {
                 score: d.score,
                 class: -1,
                 visibility: -1.0,
-                mask: d.mask.as_ref().map(|m| rle_of(m, self.width, self.height)),
+                mask: d
+                    .mask
+                    .as_ref()
+                    .map(|m| Rle::from_mask(m, self.width, self.height)),
                 flags: RecordFlags::default(),
             })
             .collect()
@@ -667,44 +670,6 @@ impl SynthFrame {
                 flags: RecordFlags::default(),
             })
             .collect()
-    }
-}
-
-/// COCO RLE of a mask placed in a `w × h` image, touching only the mask's columns pixel by
-/// pixel (the generic [`Rle::from_mask`] visits every image pixel per mask).
-fn rle_of(m: &Mask, w: u32, h: u32) -> Rle {
-    let mut counts = Vec::new();
-    let (mut prev, mut run) = (false, 0u32);
-    let mut push = |v: bool, n: u32, prev: &mut bool, run: &mut u32| {
-        if n == 0 {
-            return;
-        }
-        if v != *prev {
-            counts.push(*run);
-            *run = 0;
-            *prev = v;
-        }
-        *run += n;
-    };
-    let (mx0, mx1) = (m.x(), m.x() + m.width() as i32);
-    let my0 = m.y().clamp(0, h as i32);
-    let my1 = (m.y() + m.height() as i32).clamp(0, h as i32);
-    for x in 0..w as i32 {
-        if x < mx0 || x >= mx1 || my1 <= my0 {
-            push(false, h, &mut prev, &mut run);
-            continue;
-        }
-        push(false, my0 as u32, &mut prev, &mut run);
-        for y in my0..my1 {
-            push(m.get(x, y), 1, &mut prev, &mut run);
-        }
-        push(false, h - my1 as u32, &mut prev, &mut run);
-    }
-    counts.push(run);
-    Rle {
-        height: h,
-        width: w,
-        counts,
     }
 }
 
@@ -1248,25 +1213,6 @@ impl Iterator for Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fast_rle_matches_generic_encoder() {
-        let mut sc = Scene::new(SynthConfig {
-            frames: 3,
-            width: 97,
-            height: 61,
-            shapes: 4,
-            ..SynthConfig::default()
-        })
-        .unwrap();
-        while let Some(f) = sc.frame() {
-            for g in &f.gt {
-                assert_eq!(rle_of(&g.mask, 97, 61), Rle::from_mask(&g.mask, 97, 61));
-            }
-            let off = Mask::new(-5, 50, 20, 20, vec![1; 400]).unwrap();
-            assert_eq!(rle_of(&off, 97, 61), Rle::from_mask(&off, 97, 61));
-        }
-    }
 
     #[test]
     fn config_validation_names_the_field() {

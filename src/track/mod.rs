@@ -11,6 +11,7 @@
 //! - [`regions`]: [`estimate_regions`], which pairs are worth scoring at all (thesis Alg. 2).
 //! - [`online`]: [`Tracker`] and its `update` phases.
 //! - [`sequence`]: whole-sequence helpers (records in, records out).
+//! - [`offline`]: the offline mode: Kalman trajectory re-linker and gap filling (thesis ch. 5).
 //!
 //! A track's lifecycle: **tentative** (born from an unmatched confident detection) →
 //! **confirmed** after [`Config::min_hits`] matches → **lost** when a frame passes without a
@@ -23,6 +24,7 @@ pub mod config;
 pub mod cost;
 pub mod features;
 mod lifecycle;
+pub mod offline;
 pub mod online;
 pub mod regions;
 pub mod sequence;

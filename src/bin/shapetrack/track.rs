@@ -1,13 +1,22 @@
-//! `shapetrack track`: run the online tracker over a detection file and write the tracks.
+//! `shapetrack track`: run the online tracker over a detection file and write the tracks;
+//! with `--offline`, then the offline pass (Kalman trajectory re-linker and gap filling).
 //!
 //! Detections come from a MOTChallenge `det.txt` (comma-separated numbers, boxes) or a MOTS
 //! txt (space-separated, six fields, the sixth an RLE mask), told apart by the first line.
-//! Frames, when given, are decoded lazily one at a time from the image folder.
+//! Frames, when given, are decoded lazily one at a time from the image folder (offline, only
+//! each track's first and last appearance is kept, as a small crop).
+//!
+//! MOT and MOTS text cannot say a shape was filled in; `--format coco` (COCO-video JSON, with
+//! its per-frame `interpolated` list) and `--format cvat` (CVAT XML, `keyframe="0"`) can.
 
 use shapetrack::frame::{Frame, Mask, TrackedShape};
+use shapetrack::io::coco_video::{write_coco_video, Category, VideoInfo};
+use shapetrack::io::cvat::{write_cvat, CvatMeta};
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mot, write_mots, SeqInfo};
-use shapetrack::io::{read_text, write_text, IoError};
+use shapetrack::io::{read_text, write_text, IoError, Record};
+use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase};
 use shapetrack::track::{detections_by_frame, to_records, Config, Tracker};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -18,6 +27,10 @@ pub enum Format {
     Mot,
     /// MOTS txt: `frame id class height width rle`.
     Mots,
+    /// COCO-video JSON (one annotation per track, with per-frame `interpolated` flags).
+    Coco,
+    /// CVAT for video 1.1 XML (filled-in shapes are written with `keyframe="0"`).
+    Cvat,
 }
 
 /// Arguments of `shapetrack track`.
@@ -32,16 +45,25 @@ pub struct Args {
     /// `seqinfo.ini` (frame count, fps, image size). Default: two levels above --det, if present.
     #[arg(long)]
     pub seqinfo: Option<PathBuf>,
-    /// Frames per second (overrides seqinfo; default 30). Used by the offline re-linker.
+    /// Frames per second (overrides seqinfo; default 30): the offline re-linker's Δt = 1/fps.
     #[arg(long)]
     pub fps: Option<f64>,
-    /// Run the offline pass (Kalman trajectory re-linker) after the online one.
+    /// Run the offline pass (Kalman trajectory re-linker, gap filling) after the online one.
     #[arg(long)]
     pub offline: bool,
+    /// Offline configuration (JSON `{"online": …, "relink": …, "fill": …, "appearance": …}`;
+    /// missing fields take their defaults). Its `online` part merges over `--config` (or over
+    /// the preset for the input when `--config` is not given).
+    #[arg(long, requires = "offline")]
+    pub offline_config: Option<PathBuf>,
+    /// Also write the joins the re-linker made (JSON list of `{slave, master, slave_last,
+    /// master_first, cost, connections}`, online ids and frames).
+    #[arg(long, requires = "offline")]
+    pub joins: Option<PathBuf>,
     /// Output file.
     #[arg(long)]
     pub out: PathBuf,
-    /// Output format (default: MOT for `.txt`).
+    /// Output format (default: from the extension: `.json` COCO-video, `.xml` CVAT, else MOT).
     #[arg(long, value_enum)]
     pub format: Option<Format>,
     /// Tracker configuration (JSON; missing fields take their defaults: `Config::default()`
@@ -112,13 +134,6 @@ fn config_over(base: &Config, text: &str) -> Result<Config, serde_json::Error> {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
-    if args.offline {
-        return Err(
-            "the offline pass (--offline, Kalman trajectory re-linker) is not available \
-                    yet; run without --offline for online tracking"
-                .into(),
-        );
-    }
     let det_name = args.det.display().to_string();
     let text = read_text(&args.det)?;
     let mots = is_mots(&text);
@@ -129,12 +144,35 @@ pub fn run(args: Args) -> crate::CliResult {
     } else {
         Config::default()
     };
-    let config = match &args.config {
+    let online_config = match &args.config {
         Some(p) => {
             config_over(&base, &read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?
         }
         None => base,
     };
+    let mut offline_config = OfflineConfig {
+        online: online_config.clone(),
+        ..OfflineConfig::default()
+    };
+    if let Some(p) = &args.offline_config {
+        let text = read_text(p)?;
+        let from_file =
+            OfflineConfig::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?;
+        // The file's `online` section, when present, merges over --config (or the preset);
+        // without one, the online pass is the one --config (or the preset) describes.
+        let online_section = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("online").cloned());
+        let online = match online_section {
+            Some(section) => config_over(&online_config, &section.to_string())
+                .map_err(|e| format!("{}: {e}", p.display()))?,
+            None => online_config.clone(),
+        };
+        offline_config = OfflineConfig {
+            online,
+            ..from_file
+        };
+    }
     let records = if mots {
         parse_mots(&text, &det_name)?
     } else {
@@ -173,7 +211,22 @@ pub fn run(args: Args) -> crate::CliResult {
         });
     let images = args.frames.as_deref().map(list_images).transpose()?;
 
-    let mut tracker = Tracker::new(config)?;
+    // Online: the tracker alone. Offline: the same tracker inside the offline one, which keeps
+    // appearance snapshots while frames stream through and runs the re-linker at the end.
+    let mut online = if args.offline {
+        None
+    } else {
+        Some(Tracker::new(online_config)?)
+    };
+    let mut offline = if args.offline {
+        let t = OfflineTracker::new(offline_config, fps)?;
+        Some(match image_size {
+            Some((w, h)) => t.with_image_size(w, h),
+            None => t,
+        })
+    } else {
+        None
+    };
     let mut shapes: Vec<TrackedShape> = Vec::new();
     let mut core = Duration::ZERO;
     for (k, dets) in per_frame.iter().enumerate() {
@@ -186,12 +239,39 @@ pub fn run(args: Args) -> crate::CliResult {
             .map(|i| Frame::rgb(i.as_raw(), i.width(), i.height()))
             .transpose()?;
         let t0 = Instant::now();
-        let out = tracker.update(frame.as_ref(), dets)?;
+        if let Some(t) = online.as_mut() {
+            shapes.extend(t.update(frame.as_ref(), dets)?);
+        } else if let Some(t) = offline.as_mut() {
+            t.push_frame(frame.as_ref(), dets)?;
+        }
         core += t0.elapsed();
-        shapes.extend(out);
+    }
+    let mut summary = String::new();
+    if let Some(t) = offline {
+        let t0 = Instant::now();
+        let mut last_phase = None;
+        let res = t.finish(|p| {
+            // One line per phase on stderr, so long runs show where they are.
+            if last_phase != Some(p.phase) && p.phase != Phase::Done {
+                eprintln!("offline: {:?}", p.phase);
+                last_phase = Some(p.phase);
+            }
+        })?;
+        core += t0.elapsed();
+        summary = format!(" joins={} filled={}", res.joins.len(), res.filled);
+        if let Some(p) = &args.joins {
+            write_text(p, &serde_json::to_string_pretty(&res.joins)?)?;
+        }
+        shapes = res.shapes;
     }
 
-    let format = args.format.unwrap_or(Format::Mot);
+    let format =
+        args.format
+            .unwrap_or_else(|| match args.out.extension().and_then(|e| e.to_str()) {
+                Some("json") => Format::Coco,
+                Some("xml") => Format::Cvat,
+                _ => Format::Mot,
+            });
     if format == Format::Mots {
         for s in &mut shapes {
             if s.mask.is_none() {
@@ -211,27 +291,93 @@ pub fn run(args: Args) -> crate::CliResult {
             }
             write_mots(&out_records)
         }
+        Format::Coco => coco(&out_records, num_frames, image_size)?,
+        Format::Cvat => cvat(&out_records, num_frames, image_size, &args.det)?,
     };
     write_text(&args.out, &body)?;
 
     let ids: std::collections::HashSet<u64> = shapes.iter().map(|s| s.id).collect();
     let secs = core.as_secs_f64();
     println!(
-        "{}: frames={} detections={} tracks={} shapes={} core_fps={:.0} ({} mode, fps {})",
+        "{}: frames={} detections={} tracks={} shapes={}{} core_fps={:.0} ({} mode, {}, fps {})",
         args.det.display(),
         num_frames,
         records.len(),
         ids.len(),
         shapes.len(),
+        summary,
         if secs > 0.0 {
             num_frames as f64 / secs
         } else {
             f64::INFINITY
         },
         if mots { "mask" } else { "box" },
+        if args.offline { "offline" } else { "online" },
         fps
     );
     Ok(())
+}
+
+/// A label name per class present (`object` for the unknown class -1).
+fn class_names(records: &[Record]) -> BTreeMap<i32, String> {
+    records
+        .iter()
+        .map(|r| {
+            let name = if r.class < 0 {
+                "object".to_string()
+            } else {
+                format!("class{}", r.class)
+            };
+            (r.class, name)
+        })
+        .collect()
+}
+
+fn task_name(det: &Path) -> String {
+    det.parent()
+        .and_then(Path::parent)
+        .and_then(Path::file_name)
+        .or_else(|| det.file_stem())
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "sequence".to_string())
+}
+
+/// COCO-video (ground-truth form, so every track keeps its id) of one video.
+fn coco(
+    records: &[Record],
+    num_frames: u32,
+    image_size: Option<(u32, u32)>,
+) -> Result<String, IoError> {
+    let (width, height) = image_size.unwrap_or((0, 0));
+    let video = VideoInfo {
+        id: 1,
+        width,
+        height,
+        length: num_frames,
+        file_names: Vec::new(),
+    };
+    let categories: Vec<Category> = class_names(records)
+        .into_iter()
+        .map(|(id, name)| Category { id, name })
+        .collect();
+    write_coco_video(&[(video, records)], &categories)
+}
+
+/// CVAT for video 1.1 XML of one task.
+fn cvat(
+    records: &[Record],
+    num_frames: u32,
+    image_size: Option<(u32, u32)>,
+    det: &Path,
+) -> Result<String, IoError> {
+    let (width, height) = image_size.unwrap_or((0, 0));
+    let meta = CvatMeta {
+        name: task_name(det),
+        size: num_frames,
+        width,
+        height,
+    };
+    write_cvat(records, &meta, &class_names(records))
 }
 
 #[cfg(test)]

@@ -1,0 +1,121 @@
+#!/usr/bin/env node
+// `npm test`: every test of the project, in one command, on a fresh machine.
+//
+// Installs what is missing (scripts/setup.mjs, each step skipped when done), then runs the Rust
+// checks and tests (native and wasm), builds the app, and runs the JS unit tests, the type
+// checks and the Playwright end-to-end suite. A failing step does not stop the independent
+// ones; steps that need a failed build are skipped. Ends with one "N passed, N failed" line.
+//
+//   node scripts/test.mjs              everything
+//   node scripts/test.mjs --only=e2e   steps whose name contains "e2e" (plus their builds)
+
+import { spawnSync } from 'node:child_process';
+import { readFileSync, readdirSync } from 'node:fs';
+import { join } from 'node:path';
+import { ROOT, setup } from './setup.mjs';
+import { buildWasm } from './build-wasm.mjs';
+
+const only = process.argv.find((a) => a.startsWith('--only='))?.slice('--only='.length);
+
+/**
+ * @typedef {{ name: string, needs?: string[], run: () => void }} Step
+ */
+
+/** @param {string} cmd @param {string[]} args @param {Record<string, string>} [env] */
+function sh(cmd, args, env = {}) {
+  console.log(`\n$ ${cmd} ${args.join(' ')}`);
+  const r = spawnSync(cmd, args, { stdio: 'inherit', cwd: ROOT, env: { ...process.env, ...env } });
+  if (r.error) throw r.error;
+  if (r.status !== 0) throw new Error(`exit ${r.status}`);
+}
+
+const npx = (/** @type {string[]} */ args) => sh('npx', ['--no-install', ...args]);
+const WASM = ['--target', 'wasm32-unknown-unknown', '--no-default-features'];
+
+/** The integration tests that run in wasm: `--test NAME` for each tests/*.rs using wasm-bindgen-test. */
+function wasmTests() {
+  const dir = join(ROOT, 'tests');
+  return readdirSync(dir)
+    .filter((f) => f.endsWith('.rs') && readFileSync(join(dir, f), 'utf8').includes('wasm_bindgen_test'))
+    .flatMap((f) => ['--test', f.slice(0, -3)]);
+}
+
+/** @type {Step[]} */
+const steps = [
+  { name: 'setup', run: () => setup({ e2e: true }) },
+  { name: 'cargo fmt', needs: ['setup'], run: () => sh('cargo', ['fmt', '--all', '--check']) },
+  { name: 'cargo clippy', needs: ['setup'], run: () => sh('cargo', ['clippy', '--all-targets', '--', '-D', 'warnings']) },
+  {
+    // src/wasm.rs only exists for wasm32, so the native clippy run never sees it.
+    name: 'cargo clippy wasm32',
+    needs: ['setup'],
+    run: () => sh('cargo', ['clippy', ...WASM, '--lib', ...wasmTests(), '--', '-D', 'warnings']),
+  },
+  { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--no-fail-fast']) },
+  { name: 'build wasm', needs: ['setup'], run: () => buildWasm() },
+  {
+    // In release, after `build wasm`: the dependencies are the ones that build just compiled,
+    // so this step only compiles the test crates (minutes saved on a clean CI run).
+    name: 'wasm-bindgen tests',
+    needs: ['setup'],
+    run: () =>
+      sh('cargo', ['test', '--release', ...WASM, ...wasmTests()], {
+        CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER: 'wasm-bindgen-test-runner',
+      }),
+  },
+  { name: 'build app', needs: ['build wasm'], run: () => npx(['vite', 'build', '--config', 'www/vite.config.js', '--logLevel', 'warn']) },
+  { name: 'js unit tests', needs: ['setup'], run: () => sh('node', ['--test', 'www/test/']) },
+  {
+    name: 'js type check',
+    needs: ['build wasm'],
+    run: () => {
+      npx(['tsc', '-p', 'www/tsconfig.json']);
+      npx(['tsc', '-p', 'www/tsconfig.worker.json']);
+      npx(['tsc', '-p', 'www/test/tsconfig.json']);
+    },
+  },
+  { name: 'e2e', needs: ['build app'], run: () => sh('node', ['--test', '--test-concurrency=1', 'tests/e2e/']) },
+];
+
+/** Steps to run: the selected ones and everything they need. */
+function selected() {
+  if (!only) return new Set(steps.map((s) => s.name));
+  const want = new Set();
+  const add = (/** @type {string} */ name) => {
+    if (want.has(name)) return;
+    want.add(name);
+    for (const n of steps.find((s) => s.name === name)?.needs ?? []) add(n);
+  };
+  for (const s of steps) if (s.name.includes(only)) add(s.name);
+  return want;
+}
+
+const want = selected();
+/** @type {Map<string, 'passed' | 'failed' | 'skipped'>} */
+const result = new Map();
+for (const step of steps) {
+  if (!want.has(step.name)) continue;
+  const blocked = (step.needs ?? []).filter((n) => result.get(n) !== 'passed');
+  if (blocked.length) {
+    result.set(step.name, 'skipped');
+    console.log(`\n=== ${step.name}: skipped (needs ${blocked.join(', ')})`);
+    continue;
+  }
+  console.log(`\n=== ${step.name}`);
+  const t0 = Date.now();
+  try {
+    step.run();
+    result.set(step.name, 'passed');
+    console.log(`=== ${step.name}: passed (${((Date.now() - t0) / 1000).toFixed(0)} s)`);
+  } catch (e) {
+    result.set(step.name, 'failed');
+    console.log(`=== ${step.name}: FAILED (${e instanceof Error ? e.message : e})`);
+  }
+}
+
+console.log('\nsummary:');
+for (const [name, r] of result) console.log(`  ${r.padEnd(7)} ${name}`);
+const count = (/** @type {string} */ r) => [...result.values()].filter((v) => v === r).length;
+const failed = count('failed') + count('skipped');
+console.log(`${count('passed')} passed, ${count('failed')} failed, ${count('skipped')} skipped`);
+process.exit(failed ? 1 : 0);

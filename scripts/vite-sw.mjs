@@ -1,0 +1,59 @@
+// A Vite plugin that emits sw.js next to index.html with the build's exact file lists, so the
+// service worker can precache the app shell, every JS chunk, the worker and the wasm on its
+// first install (runtime caching alone would miss what the first visit fetched before the
+// worker took control).
+//
+// Files under a `lazy` folder (the SSD detector's model and runtime, ~19 MB, see
+// scripts/models.mjs) are left out of the install: most visitors never pick that detector.
+// The service worker caches each of them the first time it is fetched, in a cache named after
+// their content, so the detector works offline once it has been used online, and an app
+// update that leaves them unchanged keeps them.
+import { createHash } from 'node:crypto';
+import { readFileSync } from 'node:fs';
+
+/**
+ * The build's files split into what the install precaches and what is cached on first use,
+ * with a version for each set (a hash of names and contents).
+ * @param {Record<string, { type: 'chunk', code: string } | { type: 'asset', source: string | Uint8Array }>} bundle
+ * @param {string[]} lazy folder prefixes (relative to the build root) cached on first use
+ */
+export function splitBundle(bundle, lazy) {
+  const files = Object.keys(bundle)
+    .filter((f) => !f.endsWith('.map') && f !== 'sw.js')
+    .sort();
+  const isLazy = (/** @type {string} */ f) => lazy.some((p) => f.startsWith(p));
+  const version = (/** @type {string[]} */ list) => {
+    const hash = createHash('sha256');
+    for (const f of list) {
+      const item = bundle[f];
+      hash.update(f);
+      hash.update(item.type === 'chunk' ? item.code : item.source);
+    }
+    return hash.digest('hex').slice(0, 12);
+  };
+  const precache = files.filter((f) => !isLazy(f));
+  const onDemand = files.filter(isLazy);
+  return { precache, onDemand, version: version(precache), lazyVersion: version(onDemand) };
+}
+
+/**
+ * @param {{ source: string, lazy?: string[] }} opts `source`: path of the service worker
+ *   source, with the placeholders `__PRECACHE__` and `__LAZY__` (JSON array strings),
+ *   `__VERSION__` and `__LAZY_VERSION__`; `lazy`: folders cached on first use
+ * @returns {import('vite').Plugin}
+ */
+export function serviceWorker({ source, lazy = [] }) {
+  return {
+    name: 'shapetrack-service-worker',
+    apply: 'build',
+    generateBundle(_options, bundle) {
+      const split = splitBundle(/** @type {any} */ (bundle), lazy);
+      const code = readFileSync(source, 'utf8')
+        .replace("'__PRECACHE__'", JSON.stringify(JSON.stringify(['./', ...split.precache])))
+        .replace("'__LAZY__'", JSON.stringify(JSON.stringify(lazy)))
+        .replace("'__VERSION__'", JSON.stringify(split.version))
+        .replace("'__LAZY_VERSION__'", JSON.stringify(split.lazyVersion));
+      this.emitFile({ type: 'asset', fileName: 'sw.js', source: code });
+    },
+  };
+}

@@ -1,0 +1,324 @@
+//! Gap filling: shapes for the frames an identity was not observed in, marked interpolated.
+//!
+//! After the joins, each identity's shapes are walked in frame order; a gap of `1..=max_gap`
+//! missing frames between two observed shapes `a` (before) and `b` (after) is filled when it
+//! lies between two joined tracks, or inside one track when `within_tracks` is set.
+//!
+//! - **Centroid**: along the configured [`Trajectory`]: the straight line from `a`'s centroid
+//!   to `b`'s at constant speed, or the two-sided constant-acceleration Kalman bridge.
+//! - **Box**: width, height and the box centre's offset from the centroid interpolate linearly
+//!   from `a` to `b`, placed on the trajectory.
+//! - **Mask**: carried along the trajectory, translated by whole pixels: `a`'s mask for the
+//!   first half of the gap, `b`'s for the second (the closer observation of the shape); the
+//!   box is then the translated mask's box, so box and mask agree.
+//! - Score: the lower of the two ends'; state [`TrackState::Lost`]; no detection index;
+//!   `interpolated = true`.
+//!
+//! Only frames strictly between two shapes of the same identity are filled, so a filled shape
+//! can never share its (frame, id) with another one.
+
+use super::config::{FillConfig, RelinkConfig, Trajectory};
+use super::relink::{history_frames, rollout_backward, rollout_forward, track_end, Side};
+use super::{OfflineError, Phase, Progress};
+use crate::frame::{BBox, Point, TrackState, TrackedShape};
+
+/// Fills the gaps of `shapes` (final ids; `origin[i]` is shape `i`'s id before the joins).
+/// Returns the filled shapes (not yet merged into `shapes`).
+pub(crate) fn fill_gaps(
+    shapes: &[TrackedShape],
+    origin: &[u64],
+    cfg: &FillConfig,
+    relink: &RelinkConfig,
+    fps: f64,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Vec<TrackedShape>, OfflineError> {
+    let mut out = Vec::new();
+    if cfg.max_gap == 0 {
+        return Ok(out);
+    }
+    let mut by_id: std::collections::BTreeMap<u64, Vec<usize>> = Default::default();
+    for (i, s) in shapes.iter().enumerate() {
+        by_id.entry(s.id).or_default().push(i);
+    }
+    let history = history_frames(relink, fps);
+    let n = by_id.len().max(1);
+    for (done, idx) in by_id.values_mut().enumerate() {
+        if done % 64 == 0 {
+            progress(Progress {
+                phase: Phase::Filling,
+                fraction: done as f64 / n as f64,
+            });
+        }
+        idx.sort_by_key(|&i| shapes[i].frame);
+        for k in 1..idx.len() {
+            let (ia, ib) = (idx[k - 1], idx[k]);
+            let (a, b) = (&shapes[ia], &shapes[ib]);
+            let missing = b.frame.saturating_sub(a.frame).saturating_sub(1);
+            if missing == 0 || missing > cfg.max_gap {
+                continue;
+            }
+            let joined = origin.get(ia) != origin.get(ib);
+            if !joined && !cfg.within_tracks {
+                continue;
+            }
+            let path = match cfg.trajectory {
+                Trajectory::Linear => linear_path(a.centroid, b.centroid, missing),
+                Trajectory::Kalman => {
+                    let before = &idx[..k];
+                    let after = &idx[k..];
+                    kalman_path(shapes, before, after, missing, history, relink, fps)?
+                }
+            };
+            for (j, c) in path.iter().enumerate() {
+                let step = j as u32 + 1;
+                let alpha = f64::from(step) / f64::from(missing + 1);
+                out.push(filled_shape(a, b, a.frame + step, *c, alpha));
+            }
+        }
+    }
+    progress(Progress {
+        phase: Phase::Filling,
+        fraction: 1.0,
+    });
+    Ok(out)
+}
+
+/// Centroids of the `missing` frames between `ca` and `cb` on the straight line.
+fn linear_path(ca: Point, cb: Point, missing: u32) -> Vec<Point> {
+    let n = f64::from(missing + 1);
+    (1..=missing)
+        .map(|k| ca + (cb - ca) * (f64::from(k) / n))
+        .collect()
+}
+
+/// The two-sided Kalman bridge: the forward rollout from the end of `before` and the backward
+/// rollout from the start of `after` (each from its anchor, see
+/// [`track_end`](super::relink::track_end)), each shifted to pass through its observed end
+/// centroid, blended linearly in time.
+fn kalman_path(
+    shapes: &[TrackedShape],
+    before: &[usize],
+    after: &[usize],
+    missing: u32,
+    history: u32,
+    relink: &RelinkConfig,
+    fps: f64,
+) -> Result<Vec<Point>, OfflineError> {
+    let (Some(&ia), Some(&ib)) = (before.last(), after.first()) else {
+        return Ok(Vec::new());
+    };
+    let (a, b) = (&shapes[ia], &shapes[ib]);
+    let r = relink.reliable_size;
+    let (Some(ea), Some(sb)) = (
+        track_end(shapes, before, Side::End, history, r, fps),
+        track_end(shapes, after, Side::Start, history, r, fps),
+    ) else {
+        return Ok(linear_path(a.centroid, b.centroid, missing));
+    };
+    // Positions for frames ea.frame+1 ..= b.frame and sb.frame-1 down to a.frame.
+    let fwd = rollout_forward(&ea, b.frame - ea.frame, fps, relink.acceleration)?;
+    let bwd = rollout_backward(&sb, sb.frame - a.frame, fps, relink.acceleration)?;
+    let at_fwd = |f: u32| -> Option<Point> {
+        if f == ea.frame {
+            Some(ea.position)
+        } else {
+            fwd.get((f - ea.frame - 1) as usize).copied()
+        }
+    };
+    let at_bwd = |f: u32| -> Option<Point> {
+        if f == sb.frame {
+            Some(sb.position)
+        } else {
+            bwd.get((sb.frame - f - 1) as usize).copied()
+        }
+    };
+    let (Some(fa), Some(bb)) = (at_fwd(a.frame), at_bwd(b.frame)) else {
+        return Ok(linear_path(a.centroid, b.centroid, missing));
+    };
+    let (oa, ob) = (a.centroid - fa, b.centroid - bb);
+    let n = f64::from(missing + 1);
+    let mut path = Vec::with_capacity(missing as usize);
+    for k in 1..=missing {
+        let alpha = f64::from(k) / n;
+        let f = a.frame + k;
+        let (Some(pf), Some(pb)) = (at_fwd(f), at_bwd(f)) else {
+            return Ok(linear_path(a.centroid, b.centroid, missing));
+        };
+        path.push((pf + oa) * (1.0 - alpha) + (pb + ob) * alpha);
+    }
+    Ok(path)
+}
+
+fn lerp(p: f64, q: f64, a: f64) -> f64 {
+    p + (q - p) * a
+}
+
+/// The shape filled in at `frame`, centroid `c`, a fraction `alpha` of the way from `a` to `b`.
+fn filled_shape(
+    a: &TrackedShape,
+    b: &TrackedShape,
+    frame: u32,
+    c: Point,
+    alpha: f64,
+) -> TrackedShape {
+    let src = match (&a.mask, &b.mask) {
+        (Some(_), Some(_)) => Some(if alpha <= 0.5 { a } else { b }),
+        (Some(_), None) => Some(a),
+        (None, Some(_)) => Some(b),
+        (None, None) => None,
+    };
+    let (bbox, mask, centroid) = match src.and_then(|s| s.mask.as_ref().map(|m| (s, m))) {
+        Some((s, m)) => {
+            let d = c - s.centroid;
+            let (dx, dy) = (d.x.round(), d.y.round());
+            (
+                s.bbox.translated(dx, dy),
+                Some(m.translated(dx as i32, dy as i32)),
+                s.centroid + Point::new(dx, dy),
+            )
+        }
+        None => {
+            let oa = a.bbox.center() - a.centroid;
+            let ob = b.bbox.center() - b.centroid;
+            let o = oa + (ob - oa) * alpha;
+            let w = lerp(a.bbox.w, b.bbox.w, alpha);
+            let h = lerp(a.bbox.h, b.bbox.h, alpha);
+            (BBox::from_center(c + o, w, h), None, c)
+        }
+    };
+    TrackedShape {
+        id: a.id,
+        frame,
+        bbox,
+        mask,
+        centroid,
+        state: TrackState::Lost,
+        score: a.score.min(b.score),
+        class: a.class,
+        cost: 0.0,
+        det_index: None,
+        interpolated: true,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::Mask;
+
+    fn shape(id: u64, frame: u32, b: BBox) -> TrackedShape {
+        TrackedShape {
+            id,
+            frame,
+            bbox: b,
+            mask: None,
+            centroid: b.center(),
+            state: TrackState::Confirmed,
+            score: 0.9,
+            class: 1,
+            cost: 0.0,
+            det_index: Some(0),
+            interpolated: false,
+        }
+    }
+
+    #[test]
+    fn linear_fill_interpolates_boxes() {
+        let a = shape(1, 10, BBox::new(0.0, 0.0, 10.0, 20.0));
+        let mut b = shape(1, 14, BBox::new(40.0, 8.0, 14.0, 24.0));
+        b.score = 0.5;
+        let shapes = vec![a, b];
+        let out = fill_gaps(
+            &shapes,
+            &[1, 1],
+            &FillConfig::default(),
+            &RelinkConfig::default(),
+            25.0,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(out.len(), 3);
+        for (k, s) in out.iter().enumerate() {
+            let a = (k + 1) as f64 / 4.0;
+            assert_eq!(s.frame, 11 + k as u32);
+            assert!(s.interpolated && s.det_index.is_none());
+            assert_eq!(s.score, 0.5);
+            let want = BBox::new(40.0 * a, 8.0 * a, 10.0 + 4.0 * a, 20.0 + 4.0 * a);
+            for (g, w) in [
+                (s.bbox.x, want.x),
+                (s.bbox.y, want.y),
+                (s.bbox.w, want.w),
+                (s.bbox.h, want.h),
+            ] {
+                assert!((g - w).abs() < 1e-9, "{:?} vs {want:?}", s.bbox);
+            }
+        }
+        // Within-track filling off: nothing; joined gaps are still filled.
+        let cfg = FillConfig {
+            within_tracks: false,
+            ..FillConfig::default()
+        };
+        let none = fill_gaps(
+            &shapes,
+            &[1, 1],
+            &cfg,
+            &RelinkConfig::default(),
+            25.0,
+            &mut |_| {},
+        );
+        assert!(none.unwrap().is_empty());
+        let joined = fill_gaps(
+            &shapes,
+            &[1, 2],
+            &cfg,
+            &RelinkConfig::default(),
+            25.0,
+            &mut |_| {},
+        );
+        assert_eq!(joined.unwrap().len(), 3);
+        // Too long a gap is left alone.
+        let cfg = FillConfig {
+            max_gap: 2,
+            ..FillConfig::default()
+        };
+        let none = fill_gaps(
+            &shapes,
+            &[1, 1],
+            &cfg,
+            &RelinkConfig::default(),
+            25.0,
+            &mut |_| {},
+        );
+        assert!(none.unwrap().is_empty());
+    }
+
+    #[test]
+    fn masks_are_translated_along_the_path() {
+        let m = Mask::from_bbox(&BBox::new(0.0, 0.0, 4.0, 4.0));
+        let mut a = shape(3, 1, m.bbox());
+        a.mask = Some(m.clone());
+        a.centroid = m.centroid().unwrap();
+        let mb = m.translated(30, 0);
+        let mut b = shape(3, 4, mb.bbox());
+        b.mask = Some(mb.clone());
+        b.centroid = mb.centroid().unwrap();
+        let out = fill_gaps(
+            &[a, b],
+            &[3, 3],
+            &FillConfig::default(),
+            &RelinkConfig::default(),
+            10.0,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(out.len(), 2);
+        let xs: Vec<i32> = out.iter().map(|s| s.mask.as_ref().unwrap().x()).collect();
+        assert_eq!(xs, vec![10, 20]);
+        for s in &out {
+            let mk = s.mask.as_ref().unwrap();
+            assert_eq!(mk.area(), 16);
+            assert_eq!(s.bbox, mk.bbox());
+            assert_eq!(Some(s.centroid), mk.centroid());
+        }
+    }
+}

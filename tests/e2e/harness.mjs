@@ -1,0 +1,136 @@
+// End-to-end harness: a static server for the built app on an unusual localhost port, and
+// Debian's Chromium driven by playwright-core (never a browser Playwright downloads), with a
+// fresh profile per run and a log of every request so a test can prove none left localhost.
+
+import { createServer } from 'node:http';
+import { existsSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { extname, join, normalize, resolve, sep } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+export const ROOT = resolve(fileURLToPath(new URL('../..', import.meta.url)));
+export const DIST = join(ROOT, 'www', 'dist');
+export const OUT = join(ROOT, 'target', 'e2e');
+export const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
+
+const MIME = {
+  '.html': 'text/html; charset=utf-8',
+  '.js': 'text/javascript; charset=utf-8',
+  '.mjs': 'text/javascript; charset=utf-8',
+  '.css': 'text/css; charset=utf-8',
+  '.wasm': 'application/wasm',
+  '.json': 'application/json',
+  '.txt': 'text/plain; charset=utf-8',
+  '.svg': 'image/svg+xml',
+  '.png': 'image/png',
+  '.ico': 'image/x-icon',
+};
+
+/**
+ * Serves `dir` on 127.0.0.1:`port` and logs every request path.
+ * @param {string} dir
+ * @param {number} port
+ */
+export async function serve(dir, port) {
+  if (!existsSync(join(dir, 'index.html'))) {
+    throw new Error(`${dir}/index.html is missing: build the app first (npm run build)`);
+  }
+  /** @type {string[]} */
+  const log = [];
+  const server = createServer((req, res) => {
+    const url = new URL(req.url ?? '/', `http://127.0.0.1:${port}`);
+    log.push(url.pathname);
+    let path = normalize(join(dir, decodeURIComponent(url.pathname)));
+    if (!path.startsWith(dir + sep) && path !== dir) {
+      res.writeHead(403).end();
+      return;
+    }
+    if (existsSync(path) && statSync(path).isDirectory()) path = join(path, 'index.html');
+    if (!existsSync(path)) {
+      res.writeHead(404).end('not found');
+      return;
+    }
+    const type = MIME[/** @type {keyof typeof MIME} */ (extname(path))] ?? 'application/octet-stream';
+    // No HTTP caching: the offline test must be served by the service worker, not the cache.
+    res.writeHead(200, { 'content-type': type, 'cache-control': 'no-store' });
+    res.end(readFileSync(path));
+  });
+  await new Promise((ok, fail) => {
+    server.once('error', fail);
+    server.listen(port, '127.0.0.1', () => ok(undefined));
+  });
+  return {
+    url: `http://127.0.0.1:${port}/`,
+    log,
+    close: () => new Promise((ok) => server.close(() => ok(undefined))),
+  };
+}
+
+/** Whether a URL stays on this machine. */
+export function isLocal(url) {
+  const u = new URL(url);
+  if (u.protocol === 'data:' || u.protocol === 'blob:' || u.protocol === 'about:') return true;
+  return ['127.0.0.1', 'localhost', '[::1]'].includes(u.hostname);
+}
+
+/**
+ * Launches Debian's Chromium headless with a throwaway profile. Every request of every page
+ * and worker is recorded in `requests`; `foreign` lists those that left localhost.
+ * @param {{ args?: string[] }} [opts] extra Chromium flags (e.g. a fake webcam)
+ */
+export async function launch({ args = [] } = {}) {
+  if (!existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} is missing: run node scripts/setup.mjs --e2e`);
+  const profile = mkdtempSync(join(tmpdir(), 'shapetrack-e2e-'));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: CHROMIUM,
+    headless: true,
+    args: [
+      '--headless',
+      '--no-sandbox',
+      '--disable-gpu',
+      '--disable-quic',
+      '--no-first-run',
+      '--disable-background-networking',
+      '--disable-component-update',
+      '--disable-sync',
+      // A safety net under the assertion: names other than localhost do not resolve.
+      '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE localhost, EXCLUDE 127.0.0.1',
+      ...args,
+    ],
+    viewport: { width: 1600, height: 1000 },
+    acceptDownloads: true,
+  });
+  /** @type {string[]} */
+  const requests = [];
+  /** @type {string[]} */
+  const foreign = [];
+  context.on('request', (req) => {
+    const url = req.url();
+    requests.push(url);
+    if (!isLocal(url)) foreign.push(url);
+  });
+  return {
+    context,
+    requests,
+    foreign,
+    async close() {
+      await context.close();
+      rmSync(profile, { recursive: true, force: true });
+    },
+  };
+}
+
+/**
+ * Collects page errors and console errors, which fail a test.
+ * @param {import('playwright-core').Page} page
+ */
+export function watchErrors(page) {
+  /** @type {string[]} */
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
+  page.on('console', (m) => {
+    if (m.type() === 'error') errors.push(`console: ${m.text()}`);
+  });
+  return errors;
+}

@@ -1,0 +1,132 @@
+// A real image sequence (VOT "bag", JPEG frames) through the page's video path: frames are
+// decoded on the page, transferred to the worker as ImageBitmaps, written into wasm memory,
+// detected and tracked; stepping back shows the right frame again; the result exports in all
+// four formats and reads back through the core.
+
+import { after, before, test } from 'node:test';
+import assert from 'node:assert/strict';
+import { mkdirSync, readdirSync, readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { DIST, OUT, ROOT, launch, serve, watchErrors } from './harness.mjs';
+
+const PORT = 47394;
+const BAG = join(ROOT, '..', 'shared', 'data', 'vot-bag');
+const FRAMES = 60;
+
+/** @type {Awaited<ReturnType<typeof serve>>} */
+let server;
+/** @type {Awaited<ReturnType<typeof launch>>} */
+let browser;
+
+before(async () => {
+  mkdirSync(OUT, { recursive: true });
+  server = await serve(DIST, PORT);
+  browser = await launch();
+});
+
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+test('an image sequence is tracked, stepped and exported in every format', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0&speed=max`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const files = readdirSync(BAG)
+    .filter((f) => f.endsWith('.jpg'))
+    .sort()
+    .slice(0, FRAMES)
+    .map((f) => join(BAG, f));
+  assert.equal(files.length, FRAMES);
+  await page.setInputFiles('#file-images', files);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  let st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.deepEqual(st.size, [480, 360]);
+  assert.equal(st.frames, FRAMES);
+  assert.equal(st.source.kind, 'images');
+
+  await page.keyboard.press('Space');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().processed === n, FRAMES, { timeout: 60_000 });
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.processed, FRAMES);
+  assert.ok(st.ids.length > 0, 'the background subtractor found the moving bag');
+
+  // Step back with the keyboard: the frame shown follows.
+  await page.keyboard.press('Home');
+  await page.keyboard.press('ArrowRight');
+  await page.keyboard.press('ArrowRight');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame === 3);
+  await page.screenshot({ path: join(OUT, 'images.png') });
+
+  // Export in every format through the UI, and read each file back through the core.
+  const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  for (const format of ['mot', 'mots', 'coco-video', 'cvat']) {
+    await page.selectOption('#export-format', format);
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+    const text = readFileSync(await download.path(), 'utf8');
+    const back = await page.evaluate(
+      ([f, t]) => {
+        const a = /** @type {any} */ (window).__shapetrack.app.parse(`x.${f}`, t);
+        return a.records.map((/** @type {any} */ r) => [r.frame, r.id, r.bbox.x, r.bbox.y, r.bbox.w, r.bbox.h]);
+      },
+      [format, text],
+    );
+    const want = records
+      .filter((/** @type {any} */ r) => format === 'mot' || r.mask)
+      .map((/** @type {any} */ r) => [r.frame, r.id, r.bbox.x, r.bbox.y, r.bbox.w, r.bbox.h]);
+    const sortKey = (/** @type {number[]} */ a, /** @type {number[]} */ b) => a[0] - b[0] || a[1] - b[1];
+    assert.deepEqual(back.sort(sortKey), want.sort(sortKey), format);
+  }
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('offline mode tracks the whole sequence with a progress bar, then the offline pass', async (t) => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0&mode=offline`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const files = readdirSync(BAG)
+    .filter((f) => f.endsWith('.jpg'))
+    .sort()
+    .slice(0, FRAMES)
+    .map((f) => join(BAG, f));
+  await page.setInputFiles('#file-images', files);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  assert.ok(await page.locator('#play .run').isVisible(), 'the play button says "Run"');
+  await page.click('#play');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().finished, undefined, { timeout: 60_000 });
+  const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.processed, FRAMES);
+  assert.match(st.status, /tracks/);
+  // The offline pass ran on the real frames: it never adds identities, and what it filled in
+  // is in the table, flagged.
+  assert.ok(st.offline, 'the offline pass ran');
+  assert.ok(st.offline.ids <= st.offline.onlineIds);
+  const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  assert.equal(records.filter((/** @type {any} */ r) => r.interpolated).length, st.offline.filled);
+  t.diagnostic(
+    `VOT bag, ${FRAMES} frames: ids ${st.offline.onlineIds} online → ${st.offline.ids} offline ` +
+      `(${st.offline.joins} joins, ${st.offline.filled} filled); finish() ${st.offline.ms.toFixed(0)} ms`,
+  );
+  // The progress bar went to the end (frames, then the re-linker's phases) and is put away.
+  const progress = await page.evaluate(() => {
+    const p = /** @type {HTMLProgressElement} */ (document.getElementById('progress'));
+    return { hidden: p.hidden, value: p.value, max: p.max, phase: p.dataset.phase };
+  });
+  assert.deepEqual(progress, { hidden: true, value: 1, max: 1, phase: 'done' });
+  assert.ok(!(await page.locator('#play .run').isVisible()), 'after the run the button plays');
+  // Then it plays back what was tracked.
+  await page.keyboard.press('Home');
+  await page.keyboard.press('Space');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame > 5);
+  await page.keyboard.press('Space');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('no request left localhost', () => {
+  assert.deepEqual(browser.foreign, []);
+});

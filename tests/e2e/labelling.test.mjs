@@ -1,0 +1,235 @@
+// Labelling without tracking: import a real MOTChallenge file, merge two tracks with the mouse
+// and the keyboard, undo/redo, export, and compare with an expectation computed here from the
+// page's state before the merge. Also: wasm size, and the app shell from the service worker
+// with the network off.
+
+import { after, before, test } from 'node:test';
+import assert from 'node:assert/strict';
+import { mkdirSync, readFileSync, readdirSync } from 'node:fs';
+import { join } from 'node:path';
+import { gzipSync } from 'node:zlib';
+import { DIST, OUT, ROOT, launch, serve, watchErrors } from './harness.mjs';
+
+const PORT = 47391;
+const GT = join(ROOT, '..', 'shared', 'data', 'tud-motmetrics-reference');
+
+/** @type {Awaited<ReturnType<typeof serve>>} */
+let server;
+/** @type {Awaited<ReturnType<typeof launch>>} */
+let browser;
+
+before(async () => {
+  mkdirSync(OUT, { recursive: true });
+  server = await serve(DIST, PORT);
+  browser = await launch();
+});
+
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+/** The first gt file of the TUD reference data (a real MOTChallenge file). */
+function tudGt() {
+  const find = (/** @type {string} */ dir) => {
+    for (const e of readdirSync(dir, { withFileTypes: true })) {
+      const p = join(dir, e.name);
+      if (e.isDirectory()) {
+        const r = find(p);
+        if (r) return r;
+      } else if (e.name === 'gt.txt') return p;
+    }
+    return null;
+  };
+  const p = find(GT);
+  if (!p) throw new Error(`no gt.txt under ${GT}`);
+  return { name: 'gt.txt', text: readFileSync(p, 'utf8') };
+}
+
+/**
+ * MOTChallenge lines for records, formatted here from the format's definition
+ * (`frame,id,x,y,w,h,conf,class,visibility,-1`, sorted by frame then id).
+ * @param {Array<any>} records
+ */
+function motLines(records) {
+  return [...records]
+    .sort((a, b) => a.frame - b.frame || a.id - b.id)
+    .map((r) => [r.frame, r.id, r.bbox.x, r.bbox.y, r.bbox.w, r.bbox.h, r.score ?? 1, r.class ?? -1, r.visibility ?? -1, -1].join(','))
+    .join('\n') + '\n';
+}
+
+/** Merge `drop` into `keep` by the rule the app promises: the kept track wins shared frames. */
+function mergeExpected(records, keep, drop) {
+  const keepFrames = new Set(records.filter((r) => r.id === keep).map((r) => r.frame));
+  return records
+    .filter((r) => !(r.id === drop && keepFrames.has(r.frame)))
+    .map((r) => (r.id === drop ? { ...r, id: keep } : r));
+}
+
+test('import, select with the mouse, merge with the keyboard, undo/redo, export MOT', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const gt = tudGt();
+  await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
+  const before = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  assert.equal(before.length, gt.text.trim().split('\n').length, 'every line became a record');
+
+  // Two tracks visible in one frame whose box centres are not inside a third, smaller box.
+  const pick = await page.evaluate(() => {
+    const st = /** @type {any} */ (window).__shapetrack;
+    const table = st.app.model.table;
+    for (let f = 1; f <= table.lastFrame(); f++) {
+      const recs = table.at(f);
+      const ok = recs.filter((/** @type {any} */ r) => {
+        const cx = r.bbox.x + r.bbox.w / 2;
+        const cy = r.bbox.y + r.bbox.h / 2;
+        return st.app.stage.hit(table, f, { x: cx, y: cy }) === r.id;
+      });
+      if (ok.length >= 2) return { frame: f, a: ok[0], b: ok[1] };
+    }
+    return null;
+  });
+  assert.ok(pick, 'a frame with two clickable tracks');
+  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), pick.frame);
+
+  /** Clicks the centre of a record's box on the overlay canvas. */
+  const clickOn = async (/** @type {any} */ r, /** @type {boolean} */ shift) => {
+    const box = await page.locator('#overlay').boundingBox();
+    // Image size from the page state (the overlay canvas has the screen's resolution).
+    const [w, h] = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().size);
+    const size = { w, h };
+    assert.ok(box);
+    const x = box.x + ((r.bbox.x + r.bbox.w / 2) / size.w) * box.width;
+    const y = box.y + ((r.bbox.y + r.bbox.h / 2) / size.h) * box.height;
+    if (shift) await page.keyboard.down('Shift');
+    await page.mouse.click(x, y);
+    if (shift) await page.keyboard.up('Shift');
+  };
+  await clickOn(pick.a, false);
+  await clickOn(pick.b, true);
+  const sel = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().selection);
+  assert.deepEqual(sel, { a: pick.a.id, b: pick.b.id });
+  await page.keyboard.press('m');
+  const merged = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.ok(!merged.ids.includes(pick.b.id), 'the second track is gone');
+  assert.ok(merged.canUndo);
+
+  // Undo and redo through the keyboard.
+  await page.keyboard.press('Control+z');
+  let ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
+  assert.ok(ids.includes(pick.b.id), 'undo brings the track back');
+  await page.keyboard.press('Control+Shift+z');
+  ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
+  assert.ok(!ids.includes(pick.b.id), 'redo merges again');
+
+  // Export through the UI and compare with the expectation built from the state before.
+  await page.selectOption('#export-format', 'mot');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+  const path = await download.path();
+  const exported = readFileSync(path, 'utf8');
+  assert.equal(exported, motLines(mergeExpected(before, pick.a.id, pick.b.id)));
+  await page.screenshot({ path: join(OUT, 'labelling.png') });
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const gt = tudGt();
+  await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+  const st0 = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  // The longest track, clicked in the middle of its bar on the timeline.
+  const target = await page.evaluate(() => {
+    const t = /** @type {any} */ (window).__shapetrack.app.model.table;
+    let best = { id: 0, len: 0, span: [0, 0] };
+    for (const id of t.ids()) {
+      const span = t.span(id);
+      if (span[1] - span[0] > best.len) best = { id, len: span[1] - span[0], span };
+    }
+    return best;
+  });
+  const geo = await page.evaluate((id) => {
+    const tl = /** @type {any} */ (window).__shapetrack.app.timeline;
+    const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
+    const r = c.getBoundingClientRect();
+    const row = tl.ids.indexOf(id) - tl.scroll;
+    const k = r.height / c.height;
+    return { left: r.left, top: r.top, width: r.width, rowY: (2 + (row + 0.5) * tl.rowH) * k, gutter: 34 * (r.width / c.width), frames: tl.frames };
+  }, target.id);
+  const frame = Math.round((target.span[0] + target.span[1]) / 2);
+  const x = geo.left + geo.gutter + ((frame - 0.5) / geo.frames) * (geo.width - geo.gutter);
+  await page.mouse.click(x, geo.top + geo.rowY);
+  await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, frame);
+  let st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.deepEqual(st.selection, { a: target.id, b: null });
+
+  // S splits the selected track here: a new id holds the rest.
+  await page.keyboard.press('s');
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.ids.length, st0.ids.length + 1);
+  const fresh = st.selection.a;
+  assert.ok(fresh > Math.max(...st0.ids), 'the later part has a new id above every id');
+  const spans = await page.evaluate(
+    ([a, b]) => {
+      const t = /** @type {any} */ (window).__shapetrack.app.model.table;
+      return [t.span(a), t.span(b)];
+    },
+    [target.id, fresh],
+  );
+  assert.deepEqual(spans, [
+    [target.span[0], frame - 1],
+    [frame, target.span[1]],
+  ]);
+  // Delete removes it; Ctrl+Z twice brings the original track back whole.
+  await page.keyboard.press('Delete');
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.ok(!st.ids.includes(fresh));
+  await page.keyboard.press('Control+z');
+  await page.keyboard.press('Control+z');
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.deepEqual(st.ids, st0.ids);
+  // ? opens the shortcut list.
+  await page.keyboard.press('?');
+  assert.ok(await page.locator('#help-dialog').isVisible());
+  assert.ok((await page.locator('#help-table tr').count()) >= 20);
+  await page.keyboard.press('Escape');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('bad files are refused with a message, not a crash', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  await page.setInputFiles('#file-import', { name: 'bad.txt', mimeType: 'text/plain', buffer: Buffer.from('1,1,10,20,30,40\n2,x,1,1,1,1\n') });
+  await page.waitForFunction(() => document.getElementById('status')?.classList.contains('error'));
+  const status = await page.textContent('#status');
+  assert.match(status ?? '', /bad\.txt:2:2/);
+  // The failure is reported in the status line (and logged), nothing uncaught.
+  assert.deepEqual(errors.filter((e) => e.startsWith('pageerror')), []);
+  await page.close();
+});
+
+test('wasm is at most 600 KB gzipped', () => {
+  const dir = join(DIST, 'assets');
+  const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
+  assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
+  const bytes = readFileSync(join(dir, wasm[0]));
+  const gz = gzipSync(bytes, { level: 9 }).length;
+  console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
+  assert.ok(gz <= 600 * 1024, `${gz} bytes gzipped`);
+});
+
+test('no request left localhost', () => {
+  assert.ok(browser.requests.length > 0, 'requests were recorded');
+  assert.deepEqual(browser.foreign, []);
+});

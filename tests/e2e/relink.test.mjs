@@ -1,0 +1,283 @@
+// The offline pass in the app: the synthetic occlusion scene (8 shapes bouncing behind two
+// bars) tracked online, then the same scene in offline mode, where the core's trajectory
+// re-linker joins the tracks the bars broke and fills the gaps. Checked from the page state:
+// fewer ids than online, interpolated records, better identity scores against the scene's
+// ground truth, the page's table equal to the tracker's result; the progress bar through the
+// re-linker's phases; filled spans hatched on the timeline and dashed on the overlay; the
+// interpolated flag in a CVAT export read back; and merge/undo on the re-linked ids (undo
+// goes back to the online result).
+
+import { after, before, test } from 'node:test';
+import assert from 'node:assert/strict';
+import { mkdirSync, readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { DIST, OUT, launch, serve, watchErrors } from './harness.mjs';
+
+const PORT = 47397;
+const FRAMES = 300;
+
+/** @type {Awaited<ReturnType<typeof serve>>} */
+let server;
+/** @type {Awaited<ReturnType<typeof launch>>} */
+let browser;
+
+before(async () => {
+  mkdirSync(OUT, { recursive: true });
+  server = await serve(DIST, PORT);
+  browser = await launch();
+});
+
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+/** @typedef {{ frame: number, id: number, bbox: { x: number, y: number, w: number, h: number }, interpolated?: boolean }} Rec */
+
+/** @param {import('playwright-core').Page} page */
+const state = (page) => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+/** @param {import('playwright-core').Page} page @returns {Promise<Rec[]>} */
+const records = (page) => page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+
+/**
+ * Box scores of the page's table against the scene's ground truth, by the core's evaluator.
+ * @param {import('playwright-core').Page} page
+ */
+const scores = (page) =>
+  page.evaluate((frames) => {
+    const st = /** @type {any} */ (window).__shapetrack;
+    return st.app.core.evaluate(st.groundTruth(), st.records(), frames, { similarity: 'box' });
+  }, FRAMES);
+
+/** @param {Rec[]} rs */
+const idsOf = (rs) => new Set(rs.map((r) => r.id)).size;
+/** @param {Rec} r */
+const key = (r) => `${r.frame}:${r.id}`;
+
+/**
+ * Loads the occlusion scene, which starts tracking right away, and waits for the end.
+ * @param {import('playwright-core').Page} page
+ * @param {'online' | 'offline'} mode
+ */
+async function runScene(page, mode) {
+  // Record the progress bar's phase and value from the start (the run starts on load).
+  await page.addInitScript(() => {
+    const w = /** @type {any} */ (window);
+    w.__progress = [];
+    document.addEventListener('DOMContentLoaded', () => {
+      const p = /** @type {HTMLProgressElement} */ (document.getElementById('progress'));
+      new MutationObserver(() => w.__progress.push([p.dataset.phase ?? '', p.value, p.hidden])).observe(p, {
+        attributes: true,
+        attributeFilter: ['data-phase', 'value', 'hidden'],
+      });
+    });
+  });
+  await page.goto(`${server.url}?scene=occlusion&speed=max&mode=${mode}`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  await page.waitForFunction(
+    ([n, m]) => {
+      const s = /** @type {any} */ (window).__shapetrack.state();
+      return s.processed === n && !s.playing && (m === 'online' || s.finished);
+    },
+    [FRAMES, mode],
+    { timeout: 120_000 },
+  );
+}
+
+/**
+ * The pixels of the timeline row of track `id` over frames `a..=b` (middle of the row).
+ * @param {import('playwright-core').Page} page
+ */
+function timelineRow(page, id, a, b) {
+  return page.evaluate(
+    ([id, a, b]) => {
+      const tl = /** @type {any} */ (window).__shapetrack.app.timeline;
+      const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
+      const ctx = /** @type {CanvasRenderingContext2D} */ (c.getContext('2d'));
+      const row = tl.ids.indexOf(id) - tl.scroll;
+      const gutter = 34;
+      const w = c.width - gutter;
+      const x0 = Math.ceil(gutter + ((a - 1) / tl.frames) * w) + 1;
+      const x1 = Math.floor(gutter + (b / tl.frames) * w) - 1;
+      // Two rows inside the bar, so a diagonal stripe is crossed whatever its phase.
+      const out = [];
+      for (const dy of [0.35, 0.65]) {
+        const y = Math.floor(2 + (row + dy) * tl.rowH);
+        const d = ctx.getImageData(x0, y, Math.max(1, x1 - x0), 1).data;
+        for (let i = 0; i < d.length; i += 4) out.push(`${d[i]},${d[i + 1]},${d[i + 2]}`);
+      }
+      return { row, rowH: tl.rowH, pixels: out };
+    },
+    [id, a, b],
+  );
+}
+
+/**
+ * Share of painted overlay pixels along the line just below a box's bottom edge.
+ * @param {import('playwright-core').Page} page
+ * @param {Rec['bbox']} box
+ */
+function edgeCoverage(page, box) {
+  return page.evaluate((b) => {
+    const c = /** @type {HTMLCanvasElement} */ (document.getElementById('overlay'));
+    const ctx = /** @type {CanvasRenderingContext2D} */ (c.getContext('2d'));
+    const k = c.width / /** @type {any} */ (window).__shapetrack.app.stage.width;
+    const y = Math.floor((b.y + b.h) * k);
+    const x0 = Math.ceil(b.x * k) + 2;
+    const x1 = Math.floor((b.x + b.w) * k) - 2;
+    const d = ctx.getImageData(x0, y, x1 - x0, 1).data;
+    let on = 0;
+    for (let i = 3; i < d.length; i += 4) if (d[i] > 0) on++;
+    return on / (d.length / 4);
+  }, box);
+}
+
+test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown and exported', async (t) => {
+  // Online first: the same scene, the same detector.
+  const onlinePage = await browser.context.newPage();
+  const onlineErrors = watchErrors(onlinePage);
+  await runScene(onlinePage, 'online');
+  const online = await records(onlinePage);
+  const onlineScores = await scores(onlinePage);
+  assert.ok(online.every((r) => !r.interpolated));
+  assert.deepEqual(onlineErrors, []);
+  await onlinePage.close();
+
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  const t0 = Date.now();
+  await runScene(page, 'offline');
+  const wallMs = Date.now() - t0;
+  const st = await state(page);
+  const offline = await records(page);
+  const filled = offline.filter((r) => r.interpolated);
+
+  // The page state says what the pass did, and the table agrees with it.
+  assert.ok(st.offline, 'the offline pass ran');
+  assert.equal(st.offline.onlineIds, idsOf(online), 'the online pass in offline mode is the online result');
+  assert.equal(st.offline.ids, idsOf(offline));
+  assert.ok(st.offline.ids < st.offline.onlineIds, `fewer ids offline: ${st.offline.ids} vs ${st.offline.onlineIds} online`);
+  assert.ok(st.offline.joins > 0);
+  assert.equal(st.offline.filled, filled.length);
+  assert.ok(filled.length > 0, 'gaps were filled');
+  assert.ok(filled.every((r) => r.bbox.w > 0 && r.bbox.h > 0 && /** @type {any} */ (r).mask), 'filled shapes carry boxes and masks');
+  assert.match(st.status, new RegExp(`${st.offline.onlineIds} → ${st.offline.ids} tracks`));
+  // Every online record is still there (under its joined id), plus the filled ones.
+  assert.equal(offline.length, online.length + filled.length);
+  // The page's table is exactly the tracker's offline result.
+  const tracker = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.trackerRecords());
+  assert.deepEqual(
+    offline.map((r) => [key(r), !!r.interpolated, r.bbox]),
+    tracker.map((/** @type {Rec} */ r) => [key(r), !!r.interpolated, r.bbox]),
+  );
+  // The joins are right, not just fewer ids: identity scores improve against the truth.
+  const offlineScores = await scores(page);
+  assert.ok(offlineScores.idsw < onlineScores.idsw, `IDSW ${onlineScores.idsw} → ${offlineScores.idsw}`);
+  assert.ok(offlineScores.idf1 > onlineScores.idf1, `IDF1 ${onlineScores.idf1} → ${offlineScores.idf1}`);
+  assert.ok(offlineScores.hota >= onlineScores.hota, `HOTA ${onlineScores.hota} → ${offlineScores.hota}`);
+  t.diagnostic(
+    `occlusion scene, ${FRAMES} frames, background detector: ids ${st.offline.onlineIds} online → ${st.offline.ids} offline ` +
+      `(${st.offline.joins} joins, ${filled.length} records filled); IDSW ${onlineScores.idsw} → ${offlineScores.idsw}, ` +
+      `IDF1 ${onlineScores.idf1.toFixed(1)} → ${offlineScores.idf1.toFixed(1)}, HOTA ${onlineScores.hota.toFixed(1)} → ${offlineScores.hota.toFixed(1)}; ` +
+      `finish() ${st.offline.ms.toFixed(0)} ms in the worker; whole offline run ${(wallMs / 1000).toFixed(1)} s`,
+  );
+
+  // The progress bar went through the frames, then the re-linker's phases in order, to the end.
+  const progress = /** @type {Array<[string, number, boolean]>} */ (await page.evaluate(() => /** @type {any} */ (window).__progress));
+  const phases = progress.map(([p]) => p).filter((p, i, a) => p && p !== a[i - 1]);
+  assert.deepEqual(phases, ['online', 'candidates', 'appearance', 'matching', 'filling', 'done'], JSON.stringify(phases));
+  const values = progress.map(([, v]) => v);
+  assert.ok(values.every((v, i) => i === 0 || v >= values[i - 1] || v === 0), `progress never goes back: ${values}`);
+  assert.equal(values.at(-1), 1);
+  assert.ok(values.some((v) => v > 0.2 && v < 0.9), 'the online pass moves the bar');
+  assert.equal(await page.evaluate(() => /** @type {HTMLProgressElement} */ (document.getElementById('progress')).hidden), true);
+
+  // The timeline hatches a filled span (stripes over a wash: several colours) and draws an
+  // observed span solid (one colour).
+  const gap = filled[0];
+  const run = filled.filter((r) => r.id === gap.id && r.frame >= gap.frame);
+  let end = gap.frame;
+  while (run.some((r) => r.frame === end + 1)) end++;
+  const observed = offline.filter((r) => r.id === gap.id && !r.interpolated);
+  const before = observed.filter((r) => r.frame < gap.frame).map((r) => r.frame);
+  await page.evaluate((id) => /** @type {any} */ (window).__shapetrack.app.select(id, false), gap.id);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+  const hatched = await timelineRow(page, gap.id, gap.frame, end);
+  const solid = await timelineRow(page, gap.id, Math.max(1, Math.max(...before) - 8), Math.max(...before));
+  assert.ok(hatched.row >= 0, 'the track is in view on the timeline');
+  assert.ok(new Set(hatched.pixels).size >= 2, `filled span hatched: ${[...new Set(hatched.pixels)]}`);
+  assert.equal(new Set(solid.pixels).size, 1, `observed span solid: ${[...new Set(solid.pixels)]}`);
+
+  // The overlay draws a filled shape dashed: gaps along its outline, unlike a detected one.
+  const lone = (/** @type {Rec} */ r, /** @type {Rec[]} */ all) =>
+    all.every(
+      (o) =>
+        o === r ||
+        o.bbox.x > r.bbox.x + r.bbox.w + 12 ||
+        o.bbox.x + o.bbox.w + 12 < r.bbox.x ||
+        o.bbox.y > r.bbox.y + r.bbox.h + 12 ||
+        o.bbox.y + o.bbox.h + 12 < r.bbox.y,
+    );
+  const dashed = filled.find((r) => lone(r, offline.filter((o) => o.frame === r.frame)));
+  assert.ok(dashed, 'a filled shape apart from the others');
+  await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.deselect());
+  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), dashed.frame);
+  await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, dashed.frame);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+  const here = offline.filter((o) => o.frame === dashed.frame);
+  const seen = here.find((r) => !r.interpolated && lone(r, here));
+  assert.ok(seen, 'a detected shape apart from the others in the same frame');
+  const dashedCover = await edgeCoverage(page, dashed.bbox);
+  const solidCover = await edgeCoverage(page, seen.bbox);
+  assert.ok(dashedCover > 0.2 && dashedCover < 0.85, `dashed outline: ${dashedCover.toFixed(2)} of its edge painted`);
+  assert.ok(solidCover > 0.95, `solid outline: ${solidCover.toFixed(2)} of its edge painted`);
+  t.diagnostic(`outline painted: filled ${dashedCover.toFixed(2)}, detected ${solidCover.toFixed(2)}`);
+  await page.screenshot({ path: join(OUT, 'relink.png') });
+
+  // The CVAT export carries the interpolated flag (keyframe="0"), and reads back the same.
+  await page.selectOption('#export-format', 'cvat');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+  const xml = readFileSync(await download.path(), 'utf8');
+  assert.ok(xml.includes('keyframe="0"'), 'filled shapes are not keyframes');
+  const back = /** @type {Rec[]} */ (
+    await page.evaluate((text) => /** @type {any} */ (window).__shapetrack.app.parse('x.xml', text).records, xml)
+  );
+  assert.equal(idsOf(back), st.offline.ids, 'the export has the re-linked ids');
+  assert.deepEqual(
+    back.filter((r) => r.interpolated).map(key).sort(),
+    filled.map(key).sort(),
+    'exactly the filled records come back interpolated',
+  );
+  // COCO-video says it too.
+  const coco = JSON.parse(await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.exportText('coco-video')));
+  const flagged = coco.annotations.reduce((/** @type {number} */ n, /** @type {any} */ a) => n + (a.interpolated ?? []).filter(Boolean).length, 0);
+  assert.equal(flagged, filled.length, 'COCO-video interpolated lists');
+
+  // Labelling holds on the re-linked ids: merge two tracks, undo it, then undo the pass.
+  const [a, b] = st.ids;
+  await page.evaluate(([x, y]) => {
+    const app = /** @type {any} */ (window).__shapetrack.app;
+    app.select(x, false);
+    app.select(y, true);
+  }, [a, b]);
+  await page.keyboard.press('m');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().ids.length === n, st.offline.ids - 1);
+  assert.ok(!(await state(page)).ids.includes(b));
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().ids.length === n, st.offline.ids);
+  assert.deepEqual((await records(page)).map(key), offline.map(key), 'undo restores the re-linked table');
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().ids.length === n, st.offline.onlineIds);
+  const undone = await records(page);
+  assert.deepEqual(undone.map(key).sort(), online.map(key).sort(), 'undoing the pass gives the online result back');
+  await page.keyboard.press('Control+Shift+z');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().ids.length === n, st.offline.ids);
+  assert.equal((await records(page)).filter((r) => r.interpolated).length, filled.length);
+
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('no request left localhost', () => {
+  assert.deepEqual(browser.foreign, []);
+});

@@ -1,0 +1,785 @@
+//! The browser bindings, run in wasm by wasm-bindgen-test (under Node):
+//!
+//! `CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner cargo test
+//!  --target wasm32-unknown-unknown --no-default-features --test wasm_bindings`
+//!
+//! They call the exported functions the way the generated JS glue does (typed JS values in,
+//! typed JS values out) and check the JS-visible results, including that failures arrive as JS
+//! `Error` objects with the core's message.
+#![cfg(target_arch = "wasm32")]
+
+use serde::Serialize;
+use shapetrack::wasm::*;
+use tsify::Ts;
+use wasm_bindgen::{JsCast, JsValue};
+use wasm_bindgen_test::*;
+
+/// A JS value built from a Rust value the way a JS caller would pass it.
+fn js<T: Serialize>(v: &T) -> JsValue {
+    v.serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+        .unwrap()
+}
+
+fn ts<T: tsify::Tsify>(v: JsValue) -> Ts<T> {
+    Ts::new_unchecked(v)
+}
+
+/// The message of a JS `Error`; fails the test for anything else.
+fn error_message(e: JsValue) -> String {
+    let err: js_sys::Error = e.dyn_into().expect("a JS Error object");
+    String::from(err.message())
+}
+
+fn records_of(v: Ts<Records>) -> Vec<RecordJs> {
+    serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
+}
+
+/// Parses `text` as `format` and returns the records as plain structs.
+fn parse(format: &str, text: &str, name: &str) -> Result<Vec<RecordJs>, JsValue> {
+    let a = parse_annotations(ts(JsValue::from_str(format)), text, name)?;
+    let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
+    Ok(serde_json::from_value(v["records"].clone()).unwrap())
+}
+
+/// Writes records as `format` with optional sequence info.
+fn write<T: Serialize>(
+    format: &str,
+    records: &T,
+    meta: Option<serde_json::Value>,
+) -> Result<String, JsValue> {
+    write_annotations(
+        ts(JsValue::from_str(format)),
+        ts(js(records)),
+        meta.map(|m| ts(js(&m))),
+    )
+}
+
+const MOT: &str =
+    "1,1,10,20,30,40,1,-1,-1,-1\n1,2,100,20,30,40,0.5,-1,-1,-1\n2,1,12,21,30,40,1,-1,-1,-1\n";
+
+#[wasm_bindgen_test]
+fn frame_buffer_is_rgba_in_wasm_memory() {
+    let buf = FrameBuffer::new(64, 48).unwrap();
+    assert_eq!(buf.len(), 64 * 48 * 4);
+    assert_eq!((buf.width(), buf.height()), (64, 48));
+    // The pointer must lie inside linear memory so JS can build a view on it.
+    let mem: js_sys::WebAssembly::Memory = wasm_bindgen::memory().dyn_into().unwrap();
+    let size = mem
+        .buffer()
+        .dyn_into::<js_sys::ArrayBuffer>()
+        .unwrap()
+        .byte_length() as usize;
+    assert!(buf.ptr() as usize + buf.len() <= size);
+}
+
+#[wasm_bindgen_test]
+fn frame_buffer_rejects_bad_sizes_with_an_error() {
+    for (w, h) in [(0, 10), (10, 0), (20000, 10)] {
+        let msg = error_message(FrameBuffer::new(w, h).err().unwrap());
+        assert!(msg.contains(&format!("{w}x{h}")), "{msg}");
+    }
+}
+
+#[wasm_bindgen_test]
+fn mot_text_round_trips_through_records() {
+    let v = parse("mot", MOT, "a.txt").unwrap();
+    assert_eq!(v.len(), 3);
+    assert_eq!(
+        (v[1].frame, v[1].id, v[1].bbox.x, v[1].score),
+        (1, 2, 100.0, 0.5)
+    );
+    let text = write("mot", &v, None).unwrap();
+    assert_eq!(text, MOT);
+}
+
+#[wasm_bindgen_test]
+fn records_from_js_take_defaults_for_missing_fields() {
+    let row =
+        serde_json::json!([{ "frame": 3, "id": 7, "bbox": { "x": 1, "y": 2, "w": 3, "h": 4 } }]);
+    let text = write("mot", &row, None).unwrap();
+    assert_eq!(text, "3,7,1,2,3,4,1,-1,-1,-1\n");
+}
+
+#[wasm_bindgen_test]
+fn parse_errors_name_file_line_and_column() {
+    let msg = error_message(
+        parse("mot", "1,1,10,20,30,40\n2,x,1,1,1,1\n", "gt.txt")
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.starts_with("gt.txt:2:2:"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn bad_js_values_are_errors_not_traps() {
+    let msg = error_message(
+        write_annotations(
+            ts(JsValue::from_str("mot")),
+            ts(JsValue::from_f64(3.0)),
+            None,
+        )
+        .err()
+        .unwrap(),
+    );
+    assert!(msg.contains("Records"), "{msg}");
+    let msg = error_message(parse("yaml", "", "x").err().unwrap());
+    assert!(msg.contains("yaml"), "{msg}");
+    // A negative box size is a core FrameError, surfaced with its message.
+    let row =
+        serde_json::json!([{ "frame": 1, "id": 1, "bbox": { "x": 0, "y": 0, "w": -3, "h": 4 } }]);
+    let msg = error_message(write("mot", &row, None).err().unwrap());
+    assert!(msg.contains("negative size"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn masks_round_trip_between_bitmaps_and_rle() {
+    let (w, h) = (8u32, 6u32);
+    let mut full = vec![0u8; (w * h) as usize];
+    for (x, y) in [(2, 1), (3, 1), (3, 2), (5, 4)] {
+        full[y * w as usize + x] = 1;
+    }
+    let rle = encode_mask(w, h, &full).unwrap();
+    let rle_v: RleJs = serde_wasm_bindgen::from_value(JsValue::from(rle.clone())).unwrap();
+    assert_eq!(rle_v.size, [h, w]);
+    let bm = decode_mask(rle).unwrap();
+    let bm_js = JsValue::from(bm);
+    // `data` must reach JS as a Uint8Array, not an array of numbers.
+    let data = js_sys::Reflect::get(&bm_js, &"data".into()).unwrap();
+    let data: js_sys::Uint8Array = data.dyn_into().expect("Uint8Array");
+    let x = js_sys::Reflect::get(&bm_js, &"x".into())
+        .unwrap()
+        .as_f64()
+        .unwrap();
+    let width = js_sys::Reflect::get(&bm_js, &"width".into())
+        .unwrap()
+        .as_f64()
+        .unwrap();
+    assert_eq!((x, width), (2.0, 4.0));
+    assert_eq!(data.to_vec().iter().map(|&v| v as u32).sum::<u32>(), 4);
+    let msg = error_message(encode_mask(w, h, &full[1..]).err().unwrap());
+    assert!(msg.contains("expected 8x6"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn mots_text_round_trips_byte_exact() {
+    let (w, h) = (8u32, 6u32);
+    let mut full = vec![0u8; (w * h) as usize];
+    for i in [9, 10, 17, 18, 30] {
+        full[i] = 1;
+    }
+    let rle: RleJs =
+        serde_wasm_bindgen::from_value(JsValue::from(encode_mask(w, h, &full).unwrap())).unwrap();
+    let line = format!("1 5 2 {h} {w} {}\n", rle.counts);
+    let v = parse("mots", &line, "m.txt").unwrap();
+    // The box is derived from the mask: columns 1..=6, rows 1..=3.
+    assert_eq!(
+        (v[0].bbox.x, v[0].bbox.y, v[0].bbox.w, v[0].bbox.h),
+        (1.0, 1.0, 6.0, 3.0)
+    );
+    let text = write("mots", &v, None).unwrap();
+    assert_eq!(text, line);
+}
+
+/// Two tracks with masks in an 8×6 image over frames 1–3.
+fn masked_records() -> Vec<RecordJs> {
+    let (w, h) = (8u32, 6u32);
+    let mut out = Vec::new();
+    for f in 1..=3u32 {
+        for (id, x0) in [(1i64, f as usize - 1), (2, 5)] {
+            let mut full = vec![0u8; (w * h) as usize];
+            for y in 1..3 {
+                full[y * w as usize + x0] = 1;
+                full[y * w as usize + x0 + 1] = 1;
+            }
+            let rle: RleJs =
+                serde_wasm_bindgen::from_value(JsValue::from(encode_mask(w, h, &full).unwrap()))
+                    .unwrap();
+            let row = serde_json::json!({
+                "frame": f, "id": id, "class": 1,
+                "bbox": { "x": x0, "y": 1, "w": 2, "h": 2 }, "mask": rle,
+            });
+            out.push(serde_json::from_value(row).unwrap());
+        }
+    }
+    out
+}
+
+#[wasm_bindgen_test]
+fn coco_video_and_cvat_round_trip_through_the_core() {
+    let recs = masked_records();
+    let meta = serde_json::json!({ "width": 8, "height": 6, "frames": 3, "name": "t",
+        "labels": [{ "class": 1, "name": "car" }] });
+    for format in ["coco-video", "cvat"] {
+        let text = write(format, &recs, Some(meta.clone())).unwrap();
+        let a = parse_annotations(ts(JsValue::from_str(format)), &text, "x").unwrap();
+        let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
+        assert_eq!(
+            (v["width"].clone(), v["height"].clone()),
+            (8.into(), 6.into()),
+            "{format}"
+        );
+        assert_eq!(v["frames"], 3, "{format}");
+        assert!(
+            v["labels"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|l| l["name"] == "car"),
+            "{format}: {v}"
+        );
+        let back: Vec<RecordJs> = serde_json::from_value(v["records"].clone()).unwrap();
+        assert_eq!(back.len(), recs.len(), "{format}");
+        for (a, b) in recs.iter().zip(&back) {
+            assert_eq!((a.frame, a.id, a.bbox), (b.frame, b.id, b.bbox), "{format}");
+            assert_eq!(
+                a.mask.as_ref().map(|m| &m.counts),
+                b.mask.as_ref().map(|m| &m.counts),
+                "{format}"
+            );
+        }
+    }
+    // Without the frame size these formats cannot be written.
+    let msg = error_message(write("cvat", &recs, None).err().unwrap());
+    assert!(msg.contains("width and height"), "{msg}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tracker, detectors, synthetic scene, evaluation
+
+use shapetrack::io::Rle;
+use shapetrack::Mask;
+
+fn scene(preset: &str) -> SynthScene {
+    SynthScene::new(ts(JsValue::from_str(preset))).unwrap()
+}
+
+#[wasm_bindgen_test]
+fn tracker_config_type_mirrors_the_core_config_exactly() {
+    // Every core field is known to the mirror (deny_unknown_fields), and every mirror field
+    // exists in the core (the re-serialised mirror equals the core's JSON).
+    let core = serde_json::to_value(shapetrack::track::Config::default()).unwrap();
+    let mirror: TrackerConfig = serde_json::from_value(core.clone()).unwrap();
+    assert_eq!(serde_json::to_value(&mirror).unwrap(), core);
+    assert_eq!(
+        mirror.to_core().unwrap(),
+        shapetrack::track::Config::default()
+    );
+}
+
+#[wasm_bindgen_test]
+fn partial_tracker_config_overrides_only_what_it_names() {
+    let partial = serde_json::json!({ "max_lost": 60, "terms": { "iou": { "weight": 0.25 } } });
+    let mirror: TrackerConfig = serde_json::from_value(partial).unwrap();
+    let cfg = mirror.to_core().unwrap();
+    let def = shapetrack::track::Config::default();
+    assert_eq!(cfg.max_lost, 60);
+    assert_eq!(cfg.terms.iou.weight, 0.25);
+    assert_eq!(
+        cfg.terms.iou.gate, def.terms.iou.gate,
+        "absent gate keeps its default"
+    );
+    assert_eq!(cfg.min_hits, def.min_hits);
+    // Through the JS entry point: a typo is an error, not silently ignored.
+    let msg = error_message(
+        Tracker::new(Some(ts(js(&serde_json::json!({ "max_lots": 3 })))), None)
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("max_lots"), "{msg}");
+    let msg = error_message(
+        Tracker::new(Some(ts(js(&serde_json::json!({ "min_hits": 0 })))), None)
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("min_hits"), "{msg}");
+}
+
+/// Deterministic pseudo-random masks, some partly or wholly outside the image.
+fn masks() -> Vec<Mask> {
+    let mut state = 12345u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 33) as u32
+    };
+    (0..200)
+        .map(|_| {
+            let (w, h) = (1 + next() % 30, 1 + next() % 30);
+            let (x, y) = (next() as i32 % 90 - 20, next() as i32 % 70 - 20);
+            let data = (0..w * h).map(|_| (next() % 3 == 0) as u8).collect();
+            Mask::new(x, y, w, h, data).unwrap()
+        })
+        .collect()
+}
+
+/// The core's mask codec, which the page uses for every shape of every frame, agrees with the
+/// full-bitmap encoding and decoding on wasm too.
+#[wasm_bindgen_test]
+fn mask_rle_codec_round_trips_on_wasm() {
+    for m in masks() {
+        let rle = Rle::from_mask(&m, 64, 48);
+        let full: Vec<u8> = {
+            let mut f = vec![0u8; 64 * 48];
+            for (x, y) in m.pixels() {
+                if (0..64).contains(&x) && (0..48).contains(&y) {
+                    f[y as usize * 64 + x as usize] = 1;
+                }
+            }
+            f
+        };
+        assert_eq!(rle, Rle::encode(64, 48, &full).unwrap());
+        assert_eq!(rle.to_mask(), Mask::from_full(64, 48, &full).unwrap());
+    }
+}
+
+#[wasm_bindgen_test]
+fn synthetic_frames_are_the_same_in_order_and_out_of_order() {
+    let mut a = scene("default");
+    let mut b = scene("default");
+    let (w, h) = (a.width(), a.height());
+    let mut buf_a = FrameBuffer::new(w, h).unwrap();
+    let mut buf_b = FrameBuffer::new(w, h).unwrap();
+    let mut frames = Vec::new();
+    for n in 1..=8 {
+        a.render(n, &mut buf_a).unwrap();
+        frames.push(pixels(&buf_a));
+    }
+    // Jump ahead, then back: the scene replays to the frame asked for.
+    for n in [7, 3, 8, 1] {
+        let f = b.render(n, &mut buf_b).unwrap();
+        assert_eq!(f.index(), n);
+        assert!(
+            pixels(&buf_b) == frames[n as usize - 1],
+            "frame {n} differs"
+        );
+    }
+    let msg = error_message(b.render(0, &mut buf_b).err().unwrap());
+    assert!(msg.contains("outside 1..=300"), "{msg}");
+}
+
+/// The frame buffer's bytes, read through wasm memory as JS would.
+fn pixels(buf: &FrameBuffer) -> Vec<u8> {
+    let mem: js_sys::WebAssembly::Memory = wasm_bindgen::memory().dyn_into().unwrap();
+    // Copy on the JS side first: allocating the Vec may grow wasm memory, which detaches a
+    // view on it (the reason the app rebuilds its views before every use).
+    js_sys::Uint8Array::new_with_byte_offset_and_length(
+        &mem.buffer(),
+        buf.ptr() as u32,
+        buf.len() as u32,
+    )
+    .slice(0, buf.len() as u32)
+    .to_vec()
+}
+
+#[wasm_bindgen_test]
+fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut tracker = Tracker::new(None, None).unwrap();
+    // Track id per gt object over 40 frames, from the scene's own detections.
+    let mut seen: std::collections::BTreeMap<i64, std::collections::BTreeSet<i64>> =
+        Default::default();
+    for n in 1..=40 {
+        let f = s.render(n, &mut buf).unwrap();
+        let shapes: Vec<serde_json::Value> = serde_wasm_bindgen::from_value(JsValue::from(
+            tracker.update(n, &buf, &f.detections()).unwrap(),
+        ))
+        .unwrap();
+        let gt = records_of(f.ground_truth().unwrap());
+        for sh in shapes.iter().filter(|s| s["frame"] == n) {
+            let b = &sh["bbox"];
+            let (x, y) = (b["x"].as_f64().unwrap(), b["y"].as_f64().unwrap());
+            let (w, h) = (b["w"].as_f64().unwrap(), b["h"].as_f64().unwrap());
+            let tb = shapetrack::BBox::new(x, y, w, h);
+            if let Some(g) = gt.iter().find(|g| {
+                shapetrack::BBox::new(g.bbox.x, g.bbox.y, g.bbox.w, g.bbox.h).iou(&tb) > 0.7
+            }) {
+                seen.entry(g.id)
+                    .or_default()
+                    .insert(sh["id"].as_i64().unwrap());
+            }
+            assert!(sh["mask"]["counts"].is_string(), "masks come back as RLE");
+        }
+    }
+    assert_eq!(tracker.frame(), 40);
+    assert!(seen.len() >= 5, "most objects tracked: {seen:?}");
+    let stable = seen.values().filter(|ids| ids.len() == 1).count();
+    assert!(stable * 10 >= seen.len() * 8, "ids per object: {seen:?}");
+    // The whole history comes back as records.
+    let all = records_of(tracker.tracks().unwrap());
+    assert!(all.iter().all(|r| r.mask.is_some()));
+    // Frames go in order.
+    let f = s.render(42, &mut buf).unwrap();
+    let msg = error_message(tracker.update(42, &buf, &f.detections()).err().unwrap());
+    assert!(msg.contains("expected frame 41, got 42"), "{msg}");
+    // A frame of another size is refused.
+    let small = FrameBuffer::new(8, 8).unwrap();
+    let msg = error_message(tracker.update(41, &small, &f.detections()).err().unwrap());
+    assert!(msg.contains("frame size changed"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn detections_from_js_lists_are_checked() {
+    let ok = serde_json::json!({
+        "boxes": [{ "bbox": { "x": 1, "y": 2, "w": 3, "h": 4 }, "score": 0.5 }],
+    });
+    let d = Detections::from_lists(ts(js(&ok))).unwrap();
+    assert_eq!(d.len(), 1);
+    let bad = serde_json::json!({ "boxes": [{ "bbox": { "x": 1, "y": 2, "w": -3, "h": 4 } }] });
+    let msg = error_message(Detections::from_lists(ts(js(&bad))).err().unwrap());
+    assert!(msg.contains("negative size"), "{msg}");
+    // A mask is a Uint8Array whose length must match its size.
+    let lists = js_sys::Object::new();
+    let m = js_sys::Object::new();
+    for (k, v) in [("x", 2.0), ("y", 3.0), ("width", 2.0), ("height", 2.0)] {
+        js_sys::Reflect::set(&m, &k.into(), &v.into()).unwrap();
+    }
+    js_sys::Reflect::set(
+        &m,
+        &"data".into(),
+        &js_sys::Uint8Array::from(&[1u8, 1, 0][..]),
+    )
+    .unwrap();
+    js_sys::Reflect::set(&lists, &"masks".into(), &js_sys::Array::of1(&m)).unwrap();
+    let msg = error_message(Detections::from_lists(ts(lists.into())).err().unwrap());
+    assert!(msg.contains("expected 2x2"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn background_detector_finds_the_moving_shapes() {
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut bg = BackgroundDetector::new(None).unwrap();
+    let mut found = 0;
+    for n in 1..=40 {
+        s.render(n, &mut buf).unwrap();
+        found = bg.detect(&buf).unwrap().len();
+    }
+    assert!(found >= 3, "{found} detections after the model settled");
+    let opts = serde_json::json!({ "connectivity": 6 });
+    let msg = error_message(BackgroundDetector::new(Some(ts(js(&opts)))).err().unwrap());
+    assert!(msg.contains("connectivity"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn evaluation_scores_perfect_and_broken_results() {
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut gt = Vec::new();
+    for n in 1..=10 {
+        gt.extend(records_of(
+            s.render(n, &mut buf).unwrap().ground_truth().unwrap(),
+        ));
+    }
+    let scores = |res: &Vec<RecordJs>, opts: serde_json::Value| -> serde_json::Value {
+        let v = evaluate(ts(js(&gt)), ts(js(res)), 10, Some(ts(js(&opts)))).unwrap();
+        serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
+    };
+    let perfect = scores(&gt, serde_json::json!({}));
+    assert_eq!(perfect["hota"], 100.0);
+    assert_eq!(perfect["mota"], 100.0);
+    let masks = scores(&gt, serde_json::json!({ "similarity": "mask" }));
+    assert_eq!(masks["idf1"], 100.0);
+    // Swap two ids from frame 5 on: identity metrics drop, detection does not.
+    let ids: Vec<i64> = gt
+        .iter()
+        .filter(|r| r.frame == 5)
+        .map(|r| r.id)
+        .take(2)
+        .collect();
+    let swapped: Vec<RecordJs> = gt
+        .iter()
+        .cloned()
+        .map(|mut r| {
+            if r.frame >= 5 && ids.contains(&r.id) {
+                r.id = if r.id == ids[0] { ids[1] } else { ids[0] };
+            }
+            r
+        })
+        .collect();
+    let sw = scores(&swapped, serde_json::json!({}));
+    assert!(sw["mota"].as_f64().unwrap() < 100.0);
+    assert_eq!(sw["idsw"], 2);
+    assert_eq!(sw["deta"], 100.0);
+    let msg = error_message(
+        evaluate(
+            ts(js(&gt)),
+            ts(js(&gt)),
+            10,
+            Some(ts(js(&serde_json::json!({ "similarity": "area" })))),
+        )
+        .err()
+        .unwrap(),
+    );
+    assert!(msg.contains("similarity"), "{msg}");
+}
+
+// ------------------------------------------------------------------------------------------
+// The offline pass from JS
+
+#[wasm_bindgen_test]
+fn offline_option_types_mirror_the_core_config_exactly() {
+    let core = serde_json::to_value(shapetrack::track::offline::OfflineConfig::default()).unwrap();
+    // Each mirrored part knows every core field (deny_unknown_fields) and no other.
+    let relink: RelinkOptions = serde_json::from_value(core["relink"].clone()).unwrap();
+    assert_eq!(serde_json::to_value(&relink).unwrap(), core["relink"]);
+    let fill: FillOptions = serde_json::from_value(core["fill"].clone()).unwrap();
+    assert_eq!(serde_json::to_value(&fill).unwrap(), core["fill"]);
+    let app: AppearanceOptions = serde_json::from_value(core["appearance"].clone()).unwrap();
+    assert_eq!(serde_json::to_value(&app).unwrap(), core["appearance"]);
+    let opts: OfflineOptions = serde_json::from_value(serde_json::json!({ "fps": 25 })).unwrap();
+    assert_eq!(
+        opts.to_core(shapetrack::track::Config::default()).unwrap(),
+        shapetrack::track::offline::OfflineConfig::default()
+    );
+    // A partial setting changes only what it names.
+    let opts: OfflineOptions = serde_json::from_value(
+        serde_json::json!({ "fps": 30, "relink": { "solver": "greedy" }, "fill": { "max_gap": 4 } }),
+    )
+    .unwrap();
+    let cfg = opts.to_core(shapetrack::track::Config::default()).unwrap();
+    assert_eq!(
+        cfg.relink.solver,
+        shapetrack::track::offline::JoinSolver::Greedy
+    );
+    assert_eq!(cfg.fill.max_gap, 4);
+    assert_eq!(cfg.relink.gate_base, 0.5);
+}
+
+#[wasm_bindgen_test]
+fn offline_options_are_checked() {
+    let bad = |opts: serde_json::Value| -> String {
+        error_message(Tracker::new(None, Some(ts(js(&opts)))).err().unwrap())
+    };
+    assert!(bad(serde_json::json!({ "fps": 0 })).contains("fps"));
+    assert!(bad(serde_json::json!({})).contains("fps"));
+    let msg = bad(serde_json::json!({ "fps": 25, "relink": { "max_slave": 3 } }));
+    assert!(msg.contains("max_slave"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "relink": { "max_size_ratio": 0.5 } }));
+    assert!(msg.contains("relink.max_size_ratio"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "width": 640 }));
+    assert!(msg.contains("width/height"), "{msg}");
+    // An online tracker has no offline pass.
+    let mut online = Tracker::new(None, None).unwrap();
+    assert!(!online.offline());
+    let msg = error_message(online.finish(None).err().unwrap());
+    assert!(msg.contains("offline options"), "{msg}");
+}
+
+/// A JS function that appends its argument to `log` (what a page's progress callback does).
+fn recorder(log: &js_sys::Array) -> ProgressCallback {
+    let push = js_sys::Function::new_with_args("p", "this.push(p)").bind0(log);
+    JsValue::from(push).unchecked_into()
+}
+
+/// Ids in a list of records.
+fn ids(records: &[RecordJs]) -> std::collections::BTreeSet<i64> {
+    records.iter().map(|r| r.id).collect()
+}
+
+#[wasm_bindgen_test]
+fn finish_rejoins_occluded_tracks_and_fills_the_gaps() {
+    // Eight shapes bouncing behind two bars (hidden ~10 frames each time), tracked from the
+    // scene's own noisy mask detections.
+    let mut s = scene("occlusion");
+    let (w, h, frames, fps) = (s.width(), s.height(), s.frames(), s.fps());
+    let mut buf = FrameBuffer::new(w, h).unwrap();
+    let opts = serde_json::json!({ "fps": fps });
+    let mut tracker = Tracker::new(None, Some(ts(js(&opts)))).unwrap();
+    assert!(tracker.offline());
+    let mut gt = Vec::new();
+    for n in 1..=frames {
+        let f = s.render(n, &mut buf).unwrap();
+        gt.extend(records_of(f.ground_truth().unwrap()));
+        tracker.update(n, &buf, &f.detections()).unwrap();
+    }
+    let online = records_of(tracker.tracks().unwrap());
+    assert!(online.iter().all(|r| !r.interpolated));
+
+    let log = js_sys::Array::new();
+    let t0 = js_sys::Date::now();
+    let out = tracker.finish(Some(recorder(&log))).unwrap();
+    let finish_ms = js_sys::Date::now() - t0;
+    let out: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(out)).unwrap();
+    let records: Vec<RecordJs> = serde_json::from_value(out["records"].clone()).unwrap();
+    let joins = out["joins"].as_array().unwrap();
+
+    // Joins were made, and each master's id is gone (it carries its slave's identity now).
+    assert!(!joins.is_empty(), "no joins");
+    let final_ids = ids(&records);
+    for j in joins {
+        assert!(!final_ids.contains(&j["master"].as_i64().unwrap()), "{j}");
+        assert!(j["slave_last"].as_u64().unwrap() < j["master_first"].as_u64().unwrap());
+    }
+    assert!(
+        final_ids.len() < ids(&online).len(),
+        "offline ids {} vs online {}",
+        final_ids.len(),
+        ids(&online).len()
+    );
+    // Gaps were filled: interpolated records, with masks carried along, inside the frames.
+    let filled: Vec<&RecordJs> = records.iter().filter(|r| r.interpolated).collect();
+    assert!(!filled.is_empty(), "nothing filled");
+    assert_eq!(out["filled"].as_u64().unwrap() as usize, filled.len());
+    assert!(filled.iter().all(|r| r.mask.is_some()), "filled masks");
+    assert!(filled.iter().all(|r| (1..=frames).contains(&r.frame)));
+    // Every online record is still there, under its joined id, and nothing else changed.
+    assert_eq!(records.len(), online.len() + filled.len());
+    let observed: Vec<_> = records.iter().filter(|r| !r.interpolated).collect();
+    let mut by_key: std::collections::BTreeMap<(u32, String), usize> = Default::default();
+    for r in &online {
+        *by_key
+            .entry((r.frame, r.mask.as_ref().unwrap().counts.clone()))
+            .or_default() += 1;
+    }
+    for r in &observed {
+        let k = (r.frame, r.mask.as_ref().unwrap().counts.clone());
+        let n = by_key.get_mut(&k).expect("an online record");
+        *n -= 1;
+    }
+    assert!(by_key.values().all(|&n| n == 0));
+    // The joins are right, not just fewer ids: identity metrics improve against the truth.
+    let score = |res: &Vec<RecordJs>| -> serde_json::Value {
+        let v = evaluate(ts(js(&gt)), ts(js(res)), frames, None).unwrap();
+        serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
+    };
+    let (on, off) = (score(&online), score(&records));
+    assert!(
+        off["idsw"].as_u64() < on["idsw"].as_u64() && off["idf1"].as_f64() > on["idf1"].as_f64(),
+        "online {on}\noffline {off}"
+    );
+    assert!(
+        off["hota"].as_f64() >= on["hota"].as_f64(),
+        "online {on}\noffline {off}"
+    );
+    console_log!(
+        "occlusion scene, {frames} frames: ids {} online -> {} offline ({} joins, {} filled); \
+         IDSW {} -> {}, IDF1 {:.2} -> {:.2}, HOTA {:.2} -> {:.2}; finish {finish_ms:.0} ms",
+        ids(&online).len(),
+        final_ids.len(),
+        joins.len(),
+        filled.len(),
+        on["idsw"],
+        off["idsw"],
+        on["idf1"].as_f64().unwrap(),
+        off["idf1"].as_f64().unwrap(),
+        on["hota"].as_f64().unwrap(),
+        off["hota"].as_f64().unwrap(),
+    );
+
+    // Progress: phases in order, fractions in [0, 1] and growing within a phase, ending at
+    // "done" with 1.
+    let order = ["candidates", "appearance", "matching", "filling", "done"];
+    let reports: Vec<(usize, f64)> = log
+        .iter()
+        .map(|p| {
+            let p: serde_json::Value = serde_wasm_bindgen::from_value(p).unwrap();
+            let phase = p["phase"].as_str().unwrap().to_string();
+            let rank = order
+                .iter()
+                .position(|&o| o == phase)
+                .expect("a finish phase");
+            (rank, p["fraction"].as_f64().unwrap())
+        })
+        .collect();
+    assert!(reports.len() >= 5, "{reports:?}");
+    assert!(
+        reports
+            .windows(2)
+            .all(|w| w[0].0 < w[1].0 || (w[0].0 == w[1].0 && w[0].1 <= w[1].1)),
+        "{reports:?}"
+    );
+    assert!(reports.iter().all(|&(_, f)| (0.0..=1.0).contains(&f)));
+    assert_eq!(reports.last(), Some(&(4, 1.0)));
+    // With frames, the appearance phase ran (snapshots were taken during the online pass).
+    assert!(reports.iter().any(|&(r, _)| r == 1), "{reports:?}");
+    for rank in [0, 2, 3] {
+        assert!(
+            reports.iter().any(|&(r, _)| r == rank),
+            "no {}: {reports:?}",
+            order[rank]
+        );
+    }
+
+    // The tracker is final: tracks() is the result, no frame and no second finish.
+    assert!(tracker.finished());
+    assert_eq!(records_of(tracker.tracks().unwrap()), records);
+    let f = s.render(1, &mut buf).unwrap();
+    let msg = error_message(
+        tracker
+            .update(frames + 1, &buf, &f.detections())
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("finished"), "{msg}");
+    let msg = error_message(tracker.finish(None).err().unwrap());
+    assert!(msg.contains("finished"), "{msg}");
+}
+
+/// Boxes of one object moving right, hidden in frames 11..=16: two online tracks.
+fn broken_track(tracker: &mut Tracker) {
+    for n in 1..=30u32 {
+        let boxes = if (11..=16).contains(&n) {
+            serde_json::json!([])
+        } else {
+            serde_json::json!([{ "bbox": { "x": 10.0 + 8.0 * n as f64, "y": 50, "w": 30, "h": 60 }, "score": 0.95 }])
+        };
+        let d = Detections::from_lists(ts(js(&serde_json::json!({ "boxes": boxes })))).unwrap();
+        tracker.update_detections(n, &d).unwrap();
+    }
+}
+
+#[wasm_bindgen_test]
+fn a_throwing_progress_callback_is_an_error_and_leaves_the_tracker_usable() {
+    // The online tracker forgets a lost track after 3 frames, so the gap breaks it.
+    let online = serde_json::json!({ "max_lost": 3 });
+    let opts = serde_json::json!({ "fps": 25, "width": 640, "height": 480 });
+    let mut tracker = Tracker::new(Some(ts(js(&online))), Some(ts(js(&opts)))).unwrap();
+    broken_track(&mut tracker);
+    assert_eq!(
+        ids(&records_of(tracker.tracks().unwrap())).len(),
+        2,
+        "the gap breaks the track online"
+    );
+
+    let throws = js_sys::Function::new_with_args("p", "throw new Error('stop at ' + p.phase)");
+    let e = tracker
+        .finish(Some(JsValue::from(throws).unchecked_into()))
+        .err()
+        .unwrap();
+    let msg = error_message(e);
+    assert_eq!(msg, "progress callback threw: stop at candidates");
+    // A thrown non-Error value is reported too.
+    let throws = js_sys::Function::new_with_args("p", "throw 'plain string'");
+    let msg = error_message(
+        tracker
+            .finish(Some(JsValue::from(throws).unchecked_into()))
+            .err()
+            .unwrap(),
+    );
+    assert!(msg.contains("plain string"), "{msg}");
+    assert!(!tracker.finished());
+
+    // Nothing was lost: without a callback the pass runs and joins the two pieces.
+    let out = tracker.finish(None).unwrap();
+    let out: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(out)).unwrap();
+    let records: Vec<RecordJs> = serde_json::from_value(out["records"].clone()).unwrap();
+    assert_eq!(ids(&records).len(), 1, "{}", out["joins"]);
+    let filled: Vec<u32> = records
+        .iter()
+        .filter(|r| r.interpolated)
+        .map(|r| r.frame)
+        .collect();
+    assert_eq!(filled, (11..=16).collect::<Vec<_>>());
+    // Filled boxes lie on the line between the two ends.
+    for r in records.iter().filter(|r| r.interpolated) {
+        let want = 10.0 + 8.0 * r.frame as f64;
+        assert!(
+            (r.bbox.x - want).abs() < 1.0,
+            "frame {}: x {} vs {want}",
+            r.frame,
+            r.bbox.x
+        );
+    }
+}

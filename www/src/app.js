@@ -1,0 +1,902 @@
+// The app controller: owns the state (source, frame, selection, track table) and wires the
+// views, the tracker worker and the wasm core on the page together. Views render from state;
+// every change goes through a method here and ends in `render()`.
+
+import { EditModel, EditError } from './model/edits.js';
+import { TrackTable } from './model/tracks.js';
+import { Stage } from './view/stage.js';
+import { Timeline } from './view/timeline.js';
+import { Panel } from './view/panel.js';
+import { FpsMeter } from './lib/fps.js';
+import { byId } from './lib/dom.js';
+import { startWorker } from './worker/protocol.js';
+import { listDetectors } from './worker/detectors.js';
+import { videoSource, imageSource, webcamSource } from './sources/sources.js';
+import { FORMATS, guessFormat, exportName, formatInfo } from './io/formats.js';
+
+/**
+ * @typedef {import('./lib/core.js').Core} Core
+ * @typedef {import('./model/tracks.js').TrackRecord} TrackRecord
+ * @typedef {import('./sources/sources.js').Source} Source
+ * @typedef {import('./worker/protocol.js').StepResult & { painted: boolean }} StepResult
+ * @typedef {import('./io/formats.js').FormatId} FormatId
+ * @typedef {{ kind: 'synth', name: string, width: number, height: number, frames: number, fps: number }} SynthSource
+ * @typedef {Source | SynthSource} AnySource
+ */
+
+/** Redraw at most this often (ms) while tracking offline. */
+const OFFLINE_DRAW_MS = 250;
+/** Share of the offline progress bar taken by the online pass; the re-linker has the rest. */
+const ONLINE_SHARE = 0.9;
+/** The offline pass's phases after the online pass, in order, as the status line names them. */
+const PHASES = /** @type {const} */ ({
+  candidates: 'finding broken tracks',
+  appearance: 'comparing appearances',
+  matching: 'choosing joins',
+  filling: 'filling gaps',
+});
+/** Recompute scores at most this often (ms) while tracking. */
+const SCORE_MS = 500;
+
+export class App {
+  /** @param {Core} core the page's wasm instance (formats, masks, metrics) */
+  constructor(core) {
+    this.core = core;
+    this.worker = startWorker();
+    this.model = new EditModel();
+    /** @type {TrackTable | null} */
+    this.gt = null;
+    this.gtName = '';
+    /** @type {AnySource | null} */
+    this.source = null;
+    /** Whether the open source is being tracked (false: only viewing imported tracks). */
+    this.tracking = false;
+    this.frames = 0;
+    this.cur = 0;
+    this.processed = 0;
+    this.finished = false;
+    this.playing = false;
+    /** @type {Promise<void> | null} */
+    this.loop = null;
+    /** @type {'online' | 'offline'} */
+    this.mode = 'online';
+    /** @type {'realtime' | 'max'} */
+    this.speed = 'realtime';
+    this.detector = 'background';
+    /** @type {import('../pkg/shapetrack.js').ScenePreset} the synthetic scene the demo opens */
+    this.scene = 'demo';
+    /** Whether the open session can run the offline pass (a source with an end). */
+    this.offlineCapable = false;
+    /**
+     * What the last offline pass did: ids before and after, joins, filled-in records, time.
+     * @type {{ onlineIds: number, ids: number, joins: number, filled: number, ms: number } | null}
+     */
+    this.offlineReport = null;
+    /** @type {{ a: number | null, b: number | null }} */
+    this.selection = { a: null, b: null };
+    this.options = { masks: true, boxes: true, trails: true, gt: false };
+    this.fps = new FpsMeter();
+    /** Worker-side milliseconds per frame, for the status line. */
+    this.lastTimings = { detect: 0, track: 0, total: 0 };
+    this.lastEdit = '';
+    this.lastScore = 0;
+    /** @type {import('./view/panel.js').Scores | null} */
+    this.scores = null;
+    /** Serialises frame grabs: one <video> can seek to one place at a time. */
+    this.grabChain = Promise.resolve();
+
+    this.stage = new Stage(byId('frame', HTMLCanvasElement), byId('overlay', HTMLCanvasElement), (rle) =>
+      core.decodeMask(rle),
+    );
+    this.stage.onResize = () => this.render();
+    this.attached = this.worker.attach(byId('frame', HTMLCanvasElement));
+    this.timeline = new Timeline(byId('timeline', HTMLCanvasElement), ({ id, frame, add }) => {
+      if (id !== null) this.select(id, add);
+      void this.seek(frame);
+    });
+    this.panel = new Panel({
+      onSelect: (id, add) => this.select(id, add),
+      onAction: (a) => this.action(a),
+      onRenumber: (to) => this.edit(() => this.model.reassign(this.need(this.selection.a), to)),
+    });
+    this.model.subscribe(() => {
+      this.validateSelection();
+      this.scoreSoon();
+      this.render();
+    });
+    this.bindControls();
+  }
+
+  // ---------------------------------------------------------------- sources
+
+  /** Opens the synthetic demo scene (rendered and tracked in the worker). */
+  async openDemo() {
+    await this.openSource(null);
+  }
+
+  /** @param {File} file */
+  async openVideo(file) {
+    await this.openSource(await videoSource(byId('video', HTMLVideoElement), file));
+  }
+
+  /** @param {File[]} files */
+  async openImages(files) {
+    await this.openSource(await imageSource(files));
+  }
+
+  async openWebcam() {
+    await this.openSource(await webcamSource(byId('video', HTMLVideoElement)));
+  }
+
+  /**
+   * Starts a tracking session on a source (null: the synthetic demo).
+   * @param {Source | null} src
+   */
+  async openSource(src) {
+    await this.stop();
+    if (this.source && this.source.kind !== 'synth') this.source.close();
+    this.status(src ? `opening ${src.name}…` : 'starting the demo scene…');
+    const opened = await this.worker.open({
+      source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: this.scene },
+      detector: this.detector,
+      offline: src?.kind !== 'webcam',
+    });
+    /** @type {AnySource} */
+    const source = src ?? {
+      kind: 'synth',
+      name: this.scene,
+      width: opened.width,
+      height: opened.height,
+      frames: opened.frames ?? 0,
+      fps: opened.fps,
+    };
+    this.source = source;
+    // A detector with classes names them: the overlay shows them and exports carry them.
+    if (opened.classes.length) this.labels = opened.classes.flatMap((name, i) => (name ? [{ class: i, name }] : []));
+    this.tracking = true;
+    this.frames = source.frames ?? 0;
+    this.cur = 0;
+    this.processed = 0;
+    this.finished = false;
+    this.offlineCapable = opened.offline;
+    this.offlineReport = null;
+    this.selection = { a: null, b: null };
+    this.fps.reset();
+    this.model.replaceAll([]);
+    if (source.kind === 'synth') {
+      this.gt = new TrackTable();
+      this.gtName = 'scene ground truth';
+    } else if (!this.gtName.startsWith('file')) {
+      this.gt = null;
+      this.gtName = '';
+    }
+    this.scores = null;
+    this.stage.resize(source.width, source.height);
+    byId('empty').hidden = true;
+    this.status(`${source.name}: ${source.width}×${source.height}${source.frames ? `, ${source.frames} frames` : ''} · core ${opened.version}`);
+    await this.stepForward();
+  }
+
+  // ---------------------------------------------------------------- playback
+
+  /** Frames the scrubber can reach. */
+  get lastFrame() {
+    return this.frames || Math.max(this.processed, this.model.table.lastFrame());
+  }
+
+  async togglePlay() {
+    if (this.playing) await this.stop();
+    else this.play();
+  }
+
+  play() {
+    if (this.playing || !this.source) return;
+    this.playing = true;
+    this.renderTransport();
+    this.loop = this.run()
+      .catch((e) => this.fail(e))
+      .finally(() => {
+        this.playing = false;
+        this.loop = null;
+        byId('progress', HTMLProgressElement).hidden = true;
+        this.render();
+      });
+  }
+
+  async stop() {
+    this.playing = false;
+    if (this.loop) await this.loop;
+  }
+
+  /** The play loop: replays what is tracked, tracks what is not, in the chosen mode. */
+  async run() {
+    if (this.mode === 'offline' && this.tracking && !this.finished) {
+      if (this.offlineCapable) {
+        await this.runOffline();
+        return;
+      }
+      this.status('offline mode needs a video or image sequence with an end: tracking online');
+    }
+    const t0 = performance.now();
+    const f0 = this.cur;
+    while (this.playing) {
+      const next = this.cur + 1;
+      if (this.frames && next > this.frames) break;
+      if (!this.tracking || next <= this.processed) {
+        await this.show(next);
+      } else {
+        await this.track({ until: this.frames || Infinity, display: 'every' });
+        if (this.source?.kind !== 'webcam') break;
+      }
+      if (this.speed === 'realtime') await this.pace(t0, this.cur - f0);
+    }
+  }
+
+  /**
+   * Waits until `n` frames after `t0` are due at the source's frame rate.
+   * @param {number} t0
+   * @param {number} n
+   */
+  async pace(t0, n) {
+    const fps = this.source?.fps || 25;
+    const wait = t0 + (n * 1000) / fps - performance.now();
+    if (wait > 1) await new Promise((r) => setTimeout(r, wait));
+  }
+
+  /**
+   * Offline: track every remaining frame as fast as possible, then run the offline pass (the
+   * core's trajectory re-linker and gap filling) and apply what it changed to the table. The
+   * progress bar follows the frames, then the re-linker's phases.
+   */
+  async runOffline() {
+    const progress = byId('progress', HTMLProgressElement);
+    progress.hidden = false;
+    progress.max = 1;
+    progress.dataset.phase = 'online';
+    if (this.processed < (this.frames || 0)) {
+      await this.track({ until: this.frames, display: 'throttled' });
+    }
+    if (!this.playing || (this.frames && this.processed < this.frames)) return;
+    if (!this.finished) {
+      this.status('offline pass…');
+      const phases = Object.keys(PHASES);
+      const res = await this.worker.finish((p) => {
+        const i = phases.indexOf(p.phase);
+        const done = p.phase === 'done' ? 1 : (Math.max(0, i) + p.fraction) / phases.length;
+        progress.value = ONLINE_SHARE + (1 - ONLINE_SHARE) * done;
+        progress.dataset.phase = p.phase;
+        const name = PHASES[/** @type {keyof typeof PHASES} */ (p.phase)];
+        if (name) this.status(`offline pass: ${name}…`);
+      });
+      const onlineIds = this.model.table.ids().length;
+      const applied = this.model.relink({ joins: res.joins, filled: res.filled });
+      this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
+      this.finished = true;
+      const ids = this.model.table.ids().length;
+      this.offlineReport = { onlineIds, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
+      const skipped = res.joins.length - applied.joined;
+      this.status(
+        `offline pass: ${onlineIds} → ${ids} tracks (${applied.joined} joins, ${applied.filled} shapes filled in, ` +
+          `${res.ms.toFixed(0)} ms)${skipped ? `; ${skipped} join(s) left to your edits` : ''}`,
+      );
+    }
+    await this.show(this.cur || 1);
+  }
+
+  /**
+   * Tracks frames `processed+1 ..= until` through the worker, two in flight so the worker never
+   * waits for the page to draw.
+   * @param {{ until: number, display: 'every' | 'throttled' | 'none' }} opts
+   */
+  async track({ until, display }) {
+    const src = this.source;
+    if (!src) return;
+    const progress = byId('progress', HTMLProgressElement);
+    /** @type {Array<Promise<StepResult>>} */
+    const inflight = [];
+    let n = this.processed + 1;
+    let lastDraw = 0;
+    const catchUp = this.cur > this.processed + 1;
+    while (true) {
+      while (this.playing && inflight.length < 2 && n <= until) {
+        // Offline, paint a frame now and then so the labeller sees progress.
+        const now = performance.now();
+        const paint = display === 'every' ? !catchUp || n >= this.cur : display === 'throttled' && now - lastDraw > OFFLINE_DRAW_MS;
+        if (paint) lastDraw = now;
+        inflight.push(this.send(src, n++, paint));
+      }
+      const p = inflight.shift();
+      if (!p) break;
+      const res = await p;
+      this.accept(res);
+      // The worker painted the frame if it was asked to; draw its overlay.
+      if (res.painted) {
+        this.cur = res.frame;
+        this.render();
+      }
+      progress.value = this.frames ? (ONLINE_SHARE * res.frame) / this.frames : 0;
+      if (src.kind === 'webcam' && !this.playing) break;
+    }
+    if (display === 'throttled') {
+      this.cur = Math.max(this.cur, 1);
+      this.render();
+    }
+  }
+
+  /**
+   * Grabs frame `n` (in order) and posts it to the worker.
+   * @param {AnySource} src
+   * @param {number} n
+   * @param {boolean} display
+   * @returns {Promise<StepResult>}
+   */
+  send(src, n, display) {
+    const posted = this.grabChain.then(async () => {
+      /** @type {ImageBitmap | undefined} */
+      let bitmap;
+      if (src.kind === 'webcam') {
+        bitmap = (await /** @type {any} */ (src).grab()).bitmap;
+      } else if (src.kind !== 'synth') {
+        const b = await src.frameAt(n);
+        if (!b) throw new Error(`frame ${n} is not available`);
+        bitmap = b;
+      }
+      const result = this.worker.step(n, bitmap, display).then((r) => ({ ...r, painted: display }));
+      return { result };
+    });
+    this.grabChain = posted.then(
+      () => undefined,
+      () => undefined,
+    );
+    return posted.then((o) => o.result);
+  }
+
+  /** Takes one tracked frame into the table. @param {StepResult} res */
+  accept(res) {
+    this.processed = res.frame;
+    this.fps.tick(performance.now());
+    this.lastTimings = res.timings;
+    if (res.groundTruth && this.gt) {
+      for (const g of res.groundTruth) this.gt.add(g);
+    }
+    // Ingest last: it notifies the views.
+    this.model.ingest(res.shapes);
+  }
+
+  /** Tracks the next frame if it is new, else shows it. */
+  async stepForward() {
+    if (!this.source) return;
+    const next = this.cur + 1;
+    if (this.frames && next > this.frames) return;
+    if (this.tracking && next > this.processed) {
+      this.playing = true;
+      try {
+        await this.track({ until: next, display: 'every' });
+      } finally {
+        this.playing = false;
+        this.render();
+      }
+    } else {
+      await this.show(next);
+    }
+  }
+
+  /** @param {number} n */
+  async seek(n) {
+    const target = Math.max(1, Math.min(this.lastFrame || 1, Math.round(n)));
+    await this.show(target);
+  }
+
+  /**
+   * Displays frame `n` with its overlay (no tracking).
+   * @param {number} n
+   */
+  async show(n) {
+    this.cur = n;
+    // Scrubbing fires faster than frames can be fetched: one fetch at a time, the newest
+    // wanted frame next (frames skipped in between are never fetched).
+    if (this.showing) {
+      this.render();
+      return this.showing;
+    }
+    this.showing = (async () => {
+      let done = 0;
+      while (done !== this.cur) {
+        done = this.cur;
+        await this.paintFrame(done);
+        this.render();
+      }
+    })();
+    try {
+      await this.showing;
+    } finally {
+      this.showing = null;
+    }
+  }
+
+  /** @type {Promise<void> | null} */
+  showing = null;
+
+  /**
+   * Has the worker paint frame `n` of the source (a blank frame without a source or pixels).
+   * @param {number} n
+   */
+  async paintFrame(n) {
+    const src = this.source;
+    const { width, height } = this.stage;
+    if (src?.kind === 'synth') {
+      await this.worker.render(n);
+      return;
+    }
+    let bitmap = null;
+    if (src) {
+      const grabbed = this.grabChain.then(() => src.frameAt(n));
+      this.grabChain = grabbed.then(
+        () => undefined,
+        () => undefined,
+      );
+      bitmap = await grabbed;
+    }
+    await this.worker.paint(width, height, bitmap);
+  }
+
+  // ---------------------------------------------------------------- selection and edits
+
+  /**
+   * @param {number} id
+   * @param {boolean} add shift: make it the second track of a pair
+   */
+  select(id, add) {
+    if (add && this.selection.a !== null && this.selection.a !== id) this.selection = { a: this.selection.a, b: id };
+    else this.selection = { a: id, b: null };
+    this.render();
+  }
+
+  /** A selected track that no longer exists (merged away, deleted) is deselected. */
+  validateSelection() {
+    const has = (/** @type {number | null} */ id) => id !== null && this.model.table.has(id);
+    if (!has(this.selection.b)) this.selection.b = null;
+    if (!has(this.selection.a)) this.selection = { a: this.selection.b, b: null };
+  }
+
+  deselect() {
+    this.panel.cancelRenumber();
+    this.selection = { a: null, b: null };
+    this.render();
+  }
+
+  /** @param {number} dir */
+  cycleTrack(dir) {
+    const ids = this.model.table.at(this.cur).map((r) => r.id);
+    const pool = ids.length ? ids : this.model.table.ids();
+    if (!pool.length) return;
+    const i = this.selection.a === null ? -1 : pool.indexOf(this.selection.a);
+    const j = i < 0 ? (dir > 0 ? 0 : pool.length - 1) : (i + dir + pool.length) % pool.length;
+    this.select(pool[j], false);
+  }
+
+  /** @param {number | null} id */
+  need(id) {
+    if (id === null) throw new EditError('select a track first');
+    return id;
+  }
+
+  /**
+   * Runs an edit, reporting a refusal in the status line instead of throwing.
+   * @param {() => unknown} fn
+   */
+  edit(fn) {
+    try {
+      fn();
+      this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
+      this.render();
+      return true;
+    } catch (e) {
+      if (e instanceof EditError) {
+        this.status(e.message, true);
+        return false;
+      }
+      throw e;
+    }
+  }
+
+  /** @param {'merge' | 'swap' | 'split' | 'renumber' | 'delete' | 'deleteRecord' | 'undo' | 'redo'} a */
+  action(a) {
+    const { a: x, b: y } = this.selection;
+    switch (a) {
+      case 'merge':
+        this.edit(() => {
+          if (y === null) throw new EditError('shift-click a second track to merge into the first');
+          const { dropped } = this.model.merge(this.need(x), y);
+          if (dropped) this.status(`merged; ${dropped} duplicate frame(s) kept from ${x}`);
+        });
+        break;
+      case 'swap':
+        this.edit(() => {
+          if (y === null) throw new EditError('shift-click a second track to swap with');
+          this.model.swap(this.need(x), y, this.cur);
+        });
+        break;
+      case 'split':
+        this.edit(() => {
+          const fresh = this.model.split(this.need(x), this.cur);
+          this.selection = { a: fresh, b: null };
+        });
+        break;
+      case 'renumber':
+        if (x !== null) this.panel.askRenumber(this.model.nextId);
+        else this.status('select a track first', true);
+        break;
+      case 'delete':
+        this.edit(() => this.model.deleteTrack(this.need(x)));
+        break;
+      case 'deleteRecord':
+        this.edit(() => this.model.deleteRecord(this.cur, this.need(x)));
+        break;
+      case 'undo': {
+        const l = this.model.undo();
+        this.lastEdit = l ? `undid: ${l}` : '';
+        this.render();
+        break;
+      }
+      case 'redo': {
+        const l = this.model.redo();
+        this.lastEdit = l ? `redid: ${l}` : '';
+        this.render();
+        break;
+      }
+    }
+  }
+
+  // ---------------------------------------------------------------- files
+
+  /**
+   * Reads an annotation file through the core.
+   * @param {string} name
+   * @param {string} text
+   */
+  parse(name, text) {
+    const format = guessFormat(name, text);
+    const a = this.core.parseAnnotations(format, text, name);
+    if (a.videos > 1) this.status(`${name} holds ${a.videos} videos: reading the first`);
+    if (a.labels.length) this.labels = a.labels;
+    return a;
+  }
+
+  /** @type {Array<{ class: number, name: string }>} class names from the last import */
+  labels = [];
+
+  /**
+   * Imports tracks to label (replaces the table; tracking stops). Without an open source the
+   * tracks are shown on a blank canvas of the size they imply.
+   * @param {string} name
+   * @param {string} text
+   */
+  async importTracks(name, text) {
+    const parsed = this.parse(name, text);
+    const records = /** @type {TrackRecord[]} */ (parsed.records);
+    await this.stop();
+    this.tracking = false;
+    this.model.replaceAll(records);
+    if (!this.source) {
+      let w = parsed.width ?? 0;
+      let h = parsed.height ?? 0;
+      for (const r of w && h ? [] : records) {
+        if (r.mask) {
+          h = r.mask.size[0];
+          w = r.mask.size[1];
+          break;
+        }
+        w = Math.max(w, r.bbox.x + r.bbox.w);
+        h = Math.max(h, r.bbox.y + r.bbox.h);
+      }
+      this.stage.resize(Math.max(1, Math.ceil(w)), Math.max(1, Math.ceil(h)));
+      byId('empty').hidden = true;
+    }
+    this.frames = Math.max(this.frames, parsed.frames ?? 0, this.model.table.lastFrame());
+    this.status(`${name}: ${records.length} records, ${this.model.table.ids().length} tracks`);
+    await this.seek(this.cur || 1);
+  }
+
+  /** @param {string} name @param {string} text */
+  loadGroundTruth(name, text) {
+    this.gt = new TrackTable(/** @type {TrackRecord[]} */ (this.parse(name, text).records));
+    this.gtName = `file ${name}`;
+    this.options.gt = true;
+    byId('opt-gt', HTMLInputElement).checked = true;
+    this.status(`ground truth ${name}: ${this.gt.size} records`);
+    this.scoreSoon(true);
+    this.render();
+  }
+
+  /**
+   * The track table as text in `format` (written by the core).
+   * @param {FormatId} format
+   */
+  exportText(format) {
+    return this.core.writeAnnotations(format, this.model.table.all(), {
+      width: this.stage.width,
+      height: this.stage.height,
+      frames: this.lastFrame,
+      name: this.source?.name ?? 'shapetrack',
+      labels: this.labels,
+    });
+  }
+
+  /** @param {FormatId} format */
+  download(format) {
+    const text = this.exportText(format);
+    const name = exportName(this.source?.name ?? 'tracks', format);
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(new Blob([text], { type: 'text/plain' }));
+    a.download = name;
+    a.click();
+    setTimeout(() => URL.revokeObjectURL(a.href), 1000);
+    this.status(`saved ${name} (${formatInfo(format).label})`);
+  }
+
+  // ---------------------------------------------------------------- scores
+
+  /** @param {boolean} [now] */
+  scoreSoon(now = false) {
+    if (!this.gt) return;
+    const t = performance.now();
+    if (!now && t - this.lastScore < SCORE_MS) {
+      if (!this.scoreTimer) {
+        this.scoreTimer = setTimeout(() => {
+          this.scoreTimer = 0;
+          this.scoreSoon(true);
+        }, SCORE_MS);
+      }
+      return;
+    }
+    this.lastScore = t;
+    this.score();
+  }
+
+  /** @type {ReturnType<typeof setTimeout> | 0} */
+  scoreTimer = 0;
+
+  /** Scores the table against the ground truth with the core's evaluator (frames seen so far). */
+  score() {
+    if (!this.gt) return;
+    const upto = this.tracking ? this.processed : this.lastFrame;
+    const gt = this.gt.all().filter((r) => r.frame <= upto);
+    const res = this.model.table.all().filter((r) => r.frame <= upto);
+    if (!gt.length || upto < 1) return;
+    try {
+      this.scores = this.core.evaluate(gt, res, upto, { similarity: 'box' });
+    } catch (e) {
+      this.status(`scoring failed: ${e instanceof Error ? e.message : e}`, true);
+    }
+    this.panel.renderScores(this.scores, this.gtName.replace(/^file /, ''));
+  }
+
+  // ---------------------------------------------------------------- view
+
+  /**
+   * Asks for a redraw. State changes call this freely: the views are drawn once per display
+   * frame at most, so tracking faster than the screen refreshes costs no extra drawing.
+   */
+  render() {
+    if (!this.raf) this.raf = requestAnimationFrame(() => this.renderNow());
+  }
+
+  /** @type {number} pending animation frame */
+  raf = 0;
+
+  /** Main-thread milliseconds per redraw (smoothed), shown with the fps. */
+  renderMs = 0;
+
+  renderNow() {
+    this.raf = 0;
+    const t0 = performance.now();
+    const table = this.model.table;
+    // While playing, the timeline's bars and the track list (whose contents change every
+    // frame) refresh a few times a second; the overlay and playhead every frame.
+    const busy = this.playing;
+    this.stage.drawOverlay({ table, gt: this.gt, frame: this.cur, selection: this.selection, options: this.options, labels: this.labels });
+    this.timeline.render({ table, frames: this.lastFrame, frame: this.cur, selection: this.selection, busy });
+    this.panel.render({
+      table,
+      selection: this.selection,
+      frame: this.cur,
+      canUndo: this.model.canUndo,
+      canRedo: this.model.canRedo,
+      lastEdit: this.lastEdit,
+      busy,
+    });
+    this.renderTransport();
+    this.renderMs = 0.9 * this.renderMs + 0.1 * (performance.now() - t0);
+  }
+
+  renderTransport() {
+    const scrub = byId('scrub', HTMLInputElement);
+    scrub.max = String(Math.max(1, this.lastFrame));
+    scrub.value = String(Math.max(1, this.cur));
+    const total = this.frames ? `/${this.frames}` : '';
+    byId('frame-no').textContent = this.cur ? `${this.cur}${total}` : '–';
+    const fps = this.fps.fps;
+    byId('fps').textContent = fps ? `${fps.toFixed(1)} fps` : '– fps';
+    byId('fps').title = `per frame: detect ${this.lastTimings.detect.toFixed(1)} ms, track ${this.lastTimings.track.toFixed(1)} ms (worker), draw ${this.renderMs.toFixed(1)} ms (page)`;
+    const play = byId('play');
+    play.classList.toggle('playing', this.playing);
+    play.classList.toggle('run', !this.playing && this.mode === 'offline' && this.tracking && !this.finished);
+  }
+
+  /**
+   * @param {string} msg
+   * @param {boolean} [error]
+   */
+  status(msg, error = false) {
+    const el = byId('status');
+    el.textContent = msg;
+    el.title = msg;
+    el.classList.toggle('error', error);
+  }
+
+  /** @param {unknown} e */
+  fail(e) {
+    const msg = e instanceof Error ? e.message : String(e);
+    console.error(e);
+    this.status(msg, true);
+  }
+
+  // ---------------------------------------------------------------- controls
+
+  bindControls() {
+    /** @param {string} id @param {() => unknown} fn */
+    const click = (id, fn) =>
+      byId(id).addEventListener('click', () => {
+        Promise.resolve()
+          .then(fn)
+          .catch((e) => this.fail(e));
+      });
+    /** @param {string} id @param {(files: File[]) => unknown} fn */
+    const files = (id, fn) => {
+      const input = byId(id, HTMLInputElement);
+      input.addEventListener('change', () => {
+        const list = [...(input.files ?? [])];
+        input.value = '';
+        if (list.length)
+          Promise.resolve()
+            .then(() => fn(list))
+            .catch((e) => this.fail(e));
+      });
+    };
+    click('src-demo', () => this.openDemo());
+    click('empty-demo', () => this.openDemo());
+    click('src-video', () => byId('file-video').click());
+    click('src-images', () => byId('file-images').click());
+    click('src-webcam', () => this.openWebcam());
+    click('import', () => byId('file-import').click());
+    click('load-gt', () => byId('file-gt').click());
+    click('export', () => this.download(/** @type {FormatId} */ (byId('export-format', HTMLSelectElement).value)));
+    files('file-video', (f) => this.openVideo(f[0]));
+    files('file-images', (f) => this.openImages(f));
+    files('file-import', async (f) => this.importTracks(f[0].name, await f[0].text()));
+    files('file-gt', async (f) => this.loadGroundTruth(f[0].name, await f[0].text()));
+    click('play', () => this.togglePlay());
+    click('fwd', () => this.stepForward());
+    click('back', () => this.seek(this.cur - 1));
+    click('first', () => this.seek(1));
+    const scrub = byId('scrub', HTMLInputElement);
+    scrub.addEventListener('input', () => void this.seek(Number(scrub.value)).catch((e) => this.fail(e)));
+
+    const exportSel = byId('export-format', HTMLSelectElement);
+    exportSel.replaceChildren(...FORMATS.map((f) => new Option(f.label, f.id)));
+    const det = byId('detector', HTMLSelectElement);
+    det.replaceChildren(...listDetectors().map((d) => new Option(d.label, d.name)));
+    det.value = this.detector;
+    det.addEventListener('change', () => {
+      this.detector = det.value;
+      this.status(`detector: ${det.selectedOptions[0]?.text}; reopen the source to track with it`);
+    });
+    const speed = byId('speed', HTMLSelectElement);
+    speed.value = this.speed;
+    speed.addEventListener('change', () => {
+      this.speed = /** @type {'realtime' | 'max'} */ (speed.value);
+    });
+    const mode = byId('mode', HTMLSelectElement);
+    mode.addEventListener('change', () => {
+      this.mode = /** @type {'online' | 'offline'} */ (mode.value);
+      this.renderTransport();
+    });
+    for (const k of /** @type {const} */ (['masks', 'boxes', 'trails', 'gt'])) {
+      const box = byId(`opt-${k}`, HTMLInputElement);
+      box.checked = this.options[k];
+      box.addEventListener('change', () => {
+        this.options[k] = box.checked;
+        this.render();
+      });
+    }
+    const overlay = byId('overlay', HTMLCanvasElement);
+    overlay.addEventListener('pointerdown', (e) => {
+      const id = this.stage.hit(this.model.table, this.cur, this.stage.toImage(e));
+      if (id === null) {
+        if (!e.shiftKey) this.deselect();
+      } else this.select(id, e.shiftKey);
+    });
+    // Drop a video, images or an annotation file anywhere on the stage.
+    const stage = byId('stage');
+    stage.addEventListener('dragover', (e) => {
+      e.preventDefault();
+      stage.classList.add('drop');
+    });
+    stage.addEventListener('dragleave', () => stage.classList.remove('drop'));
+    stage.addEventListener('drop', (e) => {
+      e.preventDefault();
+      stage.classList.remove('drop');
+      const list = [...(e.dataTransfer?.files ?? [])];
+      Promise.resolve()
+        .then(() => this.openDropped(list))
+        .catch((err) => this.fail(err));
+    });
+  }
+
+  /** @param {File[]} list */
+  async openDropped(list) {
+    if (!list.length) return;
+    const video = list.find((f) => f.type.startsWith('video/'));
+    if (video) return this.openVideo(video);
+    const images = list.filter((f) => f.type.startsWith('image/'));
+    if (images.length) return this.openImages(images);
+    return this.importTracks(list[0].name, await list[0].text());
+  }
+
+  /**
+   * Keyboard dispatch (see lib/keys.js for the table).
+   * @param {import('./lib/keys.js').Action} a
+   */
+  async key(a) {
+    switch (a) {
+      case 'play':
+        return this.togglePlay();
+      case 'back':
+        return this.seek(this.cur - 1);
+      case 'fwd':
+        return this.stepForward();
+      case 'back10':
+        return this.seek(this.cur - 10);
+      case 'fwd10':
+        return this.seek(Math.min(this.cur + 10, this.tracking ? this.processed : this.lastFrame));
+      case 'first':
+        return this.seek(1);
+      case 'last':
+        return this.seek(this.tracking ? this.processed : this.lastFrame);
+      case 'merge':
+      case 'swap':
+      case 'split':
+      case 'renumber':
+      case 'delete':
+      case 'deleteRecord':
+      case 'undo':
+      case 'redo':
+        return this.action(a);
+      case 'deselect':
+        return this.deselect();
+      case 'prevTrack':
+        return this.cycleTrack(-1);
+      case 'nextTrack':
+        return this.cycleTrack(1);
+      case 'masks':
+      case 'boxes':
+      case 'trails':
+      case 'gt': {
+        this.options[a] = !this.options[a];
+        byId(`opt-${a}`, HTMLInputElement).checked = this.options[a];
+        return this.render();
+      }
+      case 'demo':
+        return this.openDemo();
+      case 'open':
+        return byId('file-video').click();
+      case 'import':
+        return byId('file-import').click();
+      case 'export':
+        return this.download(/** @type {FormatId} */ (byId('export-format', HTMLSelectElement).value));
+      case 'help':
+        return byId('help-dialog', HTMLDialogElement).showModal();
+    }
+  }
+}

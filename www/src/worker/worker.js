@@ -1,0 +1,300 @@
+// The tracker worker: one wasm instance, single-threaded, owning the frame buffer, the
+// detector, the tracker and (for the demo) the synthetic scene. The page stays responsive
+// while frames are tracked here. Protocol: ./protocol.js.
+//
+// The worker also paints the page's frame canvas (an OffscreenCanvas handed over once): a
+// tracked frame is painted straight from wasm memory right before its result is posted, so
+// the page only draws the overlay and no frame is copied back and forth.
+
+import { loadCore } from '../lib/core.js';
+import { createDetector } from './detectors.js';
+
+/** @typedef {import('../lib/core.js').Core} Core */
+/** @typedef {import('./protocol.js').Request & { id: number }} Req */
+
+const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (self));
+
+/**
+ * @typedef {{
+ *   core: Core,
+ *   memory: WebAssembly.Memory,
+ *   width: number,
+ *   height: number,
+ *   buffer: import('../../pkg/shapetrack.js').FrameBuffer,
+ *   tracker: import('../../pkg/shapetrack.js').Tracker,
+ *   detector: import('./detectors.js').Detector,
+ *   scene: import('../../pkg/shapetrack.js').SynthScene | null,
+ *   canvas: OffscreenCanvas | null,
+ *   ctx2d: OffscreenCanvasRenderingContext2D | null,
+ * }} Session
+ */
+
+/** @type {Session | null} */
+let session = null;
+
+/** The page's frame canvas, once attached. */
+let view = /** @type {{ canvas: OffscreenCanvas, ctx: OffscreenCanvasRenderingContext2D } | null} */ (null);
+
+/** Requests run one at a time, in order: the tracker is stateful and frames must not overlap. */
+let queue = Promise.resolve();
+
+ctx.addEventListener('message', (e) => {
+  const req = /** @type {Req} */ (e.data);
+  queue = queue.then(() => handle(req));
+});
+
+/** @param {Req} req */
+async function handle(req) {
+  try {
+    const { result, transfer } = await dispatch(req);
+    ctx.postMessage({ id: req.id, ok: true, ...result }, transfer);
+  } catch (err) {
+    const message = err instanceof Error ? err.message : String(err);
+    ctx.postMessage({ id: req.id, ok: false, error: message });
+  }
+}
+
+/**
+ * @param {Req} req
+ * @returns {Promise<{ result: Record<string, unknown>, transfer: Transferable[] }>}
+ */
+async function dispatch(req) {
+  switch (req.type) {
+    case 'open':
+      return { result: await open(req), transfer: [] };
+    case 'attach': {
+      const ctx2d = /** @type {OffscreenCanvasRenderingContext2D} */ (req.canvas.getContext('2d', { alpha: false }));
+      view = { canvas: req.canvas, ctx: ctx2d };
+      return { result: {}, transfer: [] };
+    }
+    case 'paint':
+      paint(req.width, req.height, req.bitmap ?? null);
+      return { result: {}, transfer: [] };
+    case 'step':
+      return { result: await step(req.frame, req.bitmap ?? null, req.display !== false), transfer: [] };
+    case 'render':
+      return { result: render(req.frame), transfer: [] };
+    case 'finish':
+      return { result: finish(req.id), transfer: [] };
+    case 'tracks':
+      return { result: { records: need().tracker.tracks() }, transfer: [] };
+    case 'close':
+      close();
+      return { result: {}, transfer: [] };
+    default:
+      throw new Error(`unknown request ${JSON.stringify(/** @type {any} */ (req).type)}`);
+  }
+}
+
+function need() {
+  if (!session) throw new Error('no open session: send "open" first');
+  return session;
+}
+
+function close() {
+  if (!session) return;
+  session.detector.dispose?.();
+  session.tracker.free();
+  session.buffer.free();
+  session.scene?.free();
+  session = null;
+}
+
+/** @param {import('./protocol.js').OpenRequest} req */
+async function open(req) {
+  close();
+  const { core, memory } = await loadCore();
+  /** @type {import('../../pkg/shapetrack.js').SynthScene | null} */
+  let scene = null;
+  let width;
+  let height;
+  let frames = null;
+  let fps = 25;
+  if (req.source.kind === 'synth') {
+    scene = new core.SynthScene(/** @type {import('../../pkg/shapetrack.js').ScenePreset} */ (req.source.preset ?? 'demo'));
+    width = scene.width;
+    height = scene.height;
+    frames = scene.frames;
+    fps = scene.fps;
+  } else {
+    width = req.source.width;
+    height = req.source.height;
+  }
+  const buffer = new core.FrameBuffer(width, height);
+  const detector = createDetector(req.detector, req.detectorOptions);
+  await detector.init({ core, width, height });
+  if (req.source.kind === 'frames') fps = req.source.fps || fps;
+  // With an end to the video the tracker keeps what the offline pass needs (appearance
+  // snapshots), so the page may switch to offline at any time before the end.
+  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker }, req.offline ? { fps } : null);
+  session = { core, memory, width, height, buffer, tracker, detector, scene, canvas: null, ctx2d: null };
+  return {
+    width,
+    height,
+    frames,
+    fps,
+    hasGroundTruth: scene !== null,
+    version: core.version(),
+    classes: detector.classes ?? [],
+    offline: tracker.offline,
+  };
+}
+
+/**
+ * An RGBA view on the frame buffer. Built fresh each time: any wasm allocation may grow memory
+ * and detach an older view.
+ * @param {Session} s
+ */
+function pixels(s) {
+  return new Uint8ClampedArray(s.memory.buffer, s.buffer.ptr(), s.buffer.len());
+}
+
+/**
+ * Writes a bitmap's pixels into the wasm frame buffer (scaled to the session size if needed).
+ * @param {Session} s
+ * @param {ImageBitmap} bitmap
+ */
+function load(s, bitmap) {
+  if (!s.canvas || !s.ctx2d) {
+    s.canvas = new OffscreenCanvas(s.width, s.height);
+    s.ctx2d = /** @type {OffscreenCanvasRenderingContext2D} */ (
+      s.canvas.getContext('2d', { willReadFrequently: true, alpha: false })
+    );
+  }
+  s.ctx2d.drawImage(bitmap, 0, 0, s.width, s.height);
+  const img = s.ctx2d.getImageData(0, 0, s.width, s.height);
+  pixels(s).set(img.data);
+}
+
+/**
+ * Paints the page's frame canvas: a bitmap, or (none given) a blank frame, at `width×height`.
+ * @param {number} width
+ * @param {number} height
+ * @param {ImageBitmap | null} bitmap
+ */
+function paint(width, height, bitmap) {
+  if (!view) return;
+  if (view.canvas.width !== width || view.canvas.height !== height) {
+    view.canvas.width = width;
+    view.canvas.height = height;
+  }
+  if (bitmap) {
+    view.ctx.drawImage(bitmap, 0, 0, width, height);
+    bitmap.close();
+  } else {
+    view.ctx.fillStyle = '#0b0c0e';
+    view.ctx.fillRect(0, 0, width, height);
+  }
+}
+
+/**
+ * Paints the frame buffer (the pixels wasm just worked on) without copying it first: the
+ * ImageData is a view on wasm memory, put straight onto the canvas.
+ * @param {Session} s
+ */
+function paintBuffer(s) {
+  if (!view) return;
+  if (view.canvas.width !== s.width || view.canvas.height !== s.height) {
+    view.canvas.width = s.width;
+    view.canvas.height = s.height;
+  }
+  view.ctx.putImageData(new ImageData(pixels(s), s.width, s.height), 0, 0);
+}
+
+/**
+ * Tracks one frame; paints it on the page's canvas when `display`.
+ * @param {number} frame
+ * @param {ImageBitmap | null} bitmap
+ * @param {boolean} display
+ * @returns {Promise<Omit<import('./protocol.js').StepResult, 'bitmap'>>}
+ */
+async function step(frame, bitmap, display) {
+  const s = need();
+  const t0 = performance.now();
+  /** @type {import('../../pkg/shapetrack.js').SceneFrame | null} */
+  let sceneFrame = null;
+  if (s.scene) {
+    sceneFrame = s.scene.render(frame, s.buffer);
+  } else {
+    if (!bitmap) throw new Error(`frame ${frame}: no pixels sent`);
+    load(s, bitmap);
+  }
+  const t1 = performance.now();
+  const out = await s.detector.detect({
+    index: frame,
+    width: s.width,
+    height: s.height,
+    buffer: s.buffer,
+    pixels: () => pixels(s),
+    bitmap,
+    scene: sceneFrame ? sceneFrame.detections() : null,
+  });
+  const dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(out);
+  const t2 = performance.now();
+  const detections = dets.len;
+  const shapes = s.tracker.update(frame, s.buffer, dets);
+  dets.free();
+  const t3 = performance.now();
+  const groundTruth = sceneFrame ? sceneFrame.groundTruth() : null;
+  sceneFrame?.free();
+  if (display) {
+    if (bitmap) paint(s.width, s.height, bitmap);
+    else paintBuffer(s);
+  } else {
+    bitmap?.close();
+  }
+  return {
+    frame,
+    shapes,
+    detections,
+    groundTruth,
+    timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
+  };
+}
+
+/** Progress reports are posted at most this often (ms), and at every change of phase. */
+const PROGRESS_MS = 50;
+
+/**
+ * The offline pass (the core's trajectory re-linker, thesis ch. 5) over everything tracked.
+ * Its progress goes to the page as `{ id, progress }` messages before the answer. The page
+ * already holds the online result, so only what the pass changed is sent back.
+ * @param {number} id the request's id
+ * @returns {import('./protocol.js').FinishResult}
+ */
+function finish(id) {
+  const s = need();
+  let phase = '';
+  let last = 0;
+  const t0 = performance.now();
+  const out = s.tracker.finish((progress) => {
+    const now = performance.now();
+    if (progress.phase === phase && progress.fraction < 1 && now - last < PROGRESS_MS) return;
+    phase = progress.phase;
+    last = now;
+    ctx.postMessage({ id, progress });
+  });
+  const ms = performance.now() - t0;
+  const ids = new Set(out.records.map((r) => r.id));
+  return {
+    joins: out.joins,
+    filled: out.records.filter((r) => r.interpolated),
+    records: out.records.length,
+    ids: ids.size,
+    ms,
+  };
+}
+
+/**
+ * Renders and paints a synthetic frame (scrubbing), without tracking it.
+ * @param {number} frame
+ */
+function render(frame) {
+  const s = need();
+  if (!s.scene) throw new Error('only the synthetic source renders frames in the worker');
+  const sf = s.scene.render(frame, s.buffer);
+  const groundTruth = sf.groundTruth();
+  sf.free();
+  paintBuffer(s);
+  return { groundTruth };
+}
