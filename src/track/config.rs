@@ -487,6 +487,36 @@ impl Config {
     pub fn from_json(text: &str) -> Result<Config, serde_json::Error> {
         serde_json::from_str(text)
     }
+
+    /// This config with the fields a JSON object names replaced, nested objects merged field
+    /// by field (`{"terms": {"iou": {"weight": 2}}}` changes one weight and keeps the rest of
+    /// `self`, not of the defaults). Unknown fields are errors, as in [`Config::from_json`].
+    /// This is how a partial config applies over a preset such as [`Config::masks`].
+    pub fn overlay(&self, patch: &serde_json::Value) -> Result<Config, serde_json::Error> {
+        fn merge(a: &mut serde_json::Value, b: &serde_json::Value) {
+            match (a, b) {
+                (serde_json::Value::Object(a), serde_json::Value::Object(b)) => {
+                    for (k, v) in b {
+                        match a.get_mut(k) {
+                            Some(slot) => merge(slot, v),
+                            None => {
+                                a.insert(k.clone(), v.clone());
+                            }
+                        }
+                    }
+                }
+                (a, b) => *a = b.clone(),
+            }
+        }
+        let mut value = serde_json::to_value(self)?;
+        merge(&mut value, patch);
+        serde_json::from_value(value)
+    }
+
+    /// [`Config::overlay`] from JSON text.
+    pub fn overlay_json(&self, text: &str) -> Result<Config, serde_json::Error> {
+        self.overlay(&serde_json::from_str(text)?)
+    }
 }
 
 #[cfg(test)]

@@ -65,6 +65,12 @@ export class App {
     this.detector = 'background';
     /** @type {import('../pkg/shapetrack.js').ScenePreset} the synthetic scene the demo opens */
     this.scene = 'demo';
+    /**
+     * Tracker settings over the detector's own (`?preset=default` starts from the core's box-mode
+     * defaults instead of the mask preset the mask detectors use); null: the detector's.
+     * @type {import('../pkg/shapetrack.js').TrackerConfig | null}
+     */
+    this.tracker = null;
     /** Whether the open session can run the offline pass (a source with an end). */
     this.offlineCapable = false;
     /**
@@ -139,6 +145,7 @@ export class App {
     const opened = await this.worker.open({
       source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: this.scene },
       detector: this.detector,
+      ...(this.tracker ? { tracker: this.tracker } : {}),
       offline: src?.kind !== 'webcam',
     });
     /** @type {AnySource} */

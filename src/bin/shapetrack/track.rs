@@ -109,27 +109,9 @@ fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
         })
 }
 
-/// `base` with the fields given in the JSON `text` replaced (nested objects merge field by
-/// field); unknown fields are errors, as in [`Config::from_json`].
+/// `base` with the fields given in the JSON `text` replaced (see [`Config::overlay`]).
 fn config_over(base: &Config, text: &str) -> Result<Config, serde_json::Error> {
-    fn merge(a: &mut serde_json::Value, b: serde_json::Value) {
-        match (a, b) {
-            (serde_json::Value::Object(a), serde_json::Value::Object(b)) => {
-                for (k, v) in b {
-                    match a.get_mut(&k) {
-                        Some(slot) => merge(slot, v),
-                        None => {
-                            a.insert(k, v);
-                        }
-                    }
-                }
-            }
-            (a, b) => *a = b,
-        }
-    }
-    let mut value = serde_json::to_value(base)?;
-    merge(&mut value, serde_json::from_str(text)?);
-    serde_json::from_value(value)
+    base.overlay_json(text)
 }
 
 /// Runs the subcommand.
