@@ -74,8 +74,10 @@ export class App {
     /** Whether the open session can run the offline pass (a source with an end). */
     this.offlineCapable = false;
     /**
-     * What the last offline pass did: ids before and after, joins, filled-in records, time.
-     * @type {{ onlineIds: number, ids: number, joins: number, filled: number, ms: number } | null}
+     * What the last offline pass did: ids before and after, joins, filled-in records, time; and
+     * how many records the online pass had already flagged interpolated (coasted over a missed
+     * detection, mask preset).
+     * @type {{ onlineIds: number, onlineInterpolated: number, ids: number, joins: number, filled: number, ms: number } | null}
      */
     this.offlineReport = null;
     /** @type {{ a: number | null, b: number | null }} */
@@ -276,11 +278,12 @@ export class App {
         if (name) this.status(`offline pass: ${name}…`);
       });
       const onlineIds = this.model.table.ids().length;
+      const onlineInterpolated = this.model.table.all().filter((r) => r.interpolated).length;
       const applied = this.model.relink({ joins: res.joins, filled: res.filled });
       this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
       this.finished = true;
       const ids = this.model.table.ids().length;
-      this.offlineReport = { onlineIds, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
+      this.offlineReport = { onlineIds, onlineInterpolated, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
       const skipped = res.joins.length - applied.joined;
       this.status(
         `offline pass: ${onlineIds} → ${ids} tracks (${applied.joined} joins, ${applied.filled} shapes filled in, ` +
