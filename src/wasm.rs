@@ -1319,6 +1319,11 @@ pub struct FillOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional, type = "\"linear\" | \"kalman\"")]
     pub trajectory: Option<Trajectory>,
+    /// Gaps between two partial mask views (below this fraction of the shape's usual area)
+    /// are hides and are not filled (0: fill them too).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub hidden_ratio: Option<f64>,
 }
 
 /// SIFT detector settings for the appearance snapshots (the core's `SiftConfig`).

@@ -325,9 +325,7 @@ fn quality_gate() {
 
     // The mask preset is what masks are tracked with: it must beat the box-mode defaults on
     // mask detections, online, and the re-linker must not add identity switches to it (its
-    // online pass already re-identifies by appearance, so there is little left to join; the
-    // filled shapes through full hides count as false positives against this ground truth
-    // of visible parts, which is why offline HOTA is not asserted higher here).
+    // online pass already re-identifies by appearance, so there is little left to join).
     for (k, p) in &synth_masks {
         let d = &synth[k];
         assert!(
@@ -337,6 +335,10 @@ fn quality_gate() {
             d.online
         );
         assert!(p.offline.idsw <= p.online.idsw, "{k}: {p:?}");
+        // Gaps between partial views (hides) are not filled (`fill.hidden_ratio`), so the
+        // offline pass adds no shapes nobody can see; what it does fill (missed detections)
+        // leaves HOTA within a hair of online at worst (seed 2: −0.014 when it was added).
+        assert!(p.offline.hota >= p.online.hota - 0.05, "{k}: {p:?}");
     }
 
     if std::env::var_os("REGENERATE").is_some() {
