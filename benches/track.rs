@@ -1,7 +1,13 @@
-//! Box-mode tracking speed (frames per second, single thread): MOT15-train sequences from
-//! their `det/det.txt`, and synthetic scenes with 50 and 200 moving boxes per frame.
+//! Tracking speed (frames per second, single thread; criterion reports `elem/s` = frames per
+//! second):
 //!
-//! `cargo bench --bench track` (criterion reports `elem/s` = frames per second).
+//! - box mode: MOT15-train sequences from their `det/det.txt`, and synthetic scenes with 50
+//!   and 200 moving boxes per frame;
+//! - mask mode (`Config::masks`, frames given, appearance where needed): the browser demo's
+//!   scene (`SynthConfig::demo()`, 1280×720, 12 shapes) and the occlusion scene of
+//!   `tests/track_synth.rs` (640×480, 10 shapes). Frames are rendered before timing.
+//!
+//! `cargo bench --bench track`. For the per-phase split and more sizes: `shapetrack bench`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rand::{Rng, SeedableRng};
@@ -9,7 +15,8 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use shapetrack::frame::{BBox, Detection};
 use shapetrack::io::motchallenge::{parse_mot, SeqInfo};
 use shapetrack::io::read_text;
-use shapetrack::track::{detections_by_frame, track_sequence, Config};
+use shapetrack::synth::{Scene, SynthConfig, SynthFrame};
+use shapetrack::track::{detections_by_frame, track_sequence, Config, Tracker};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -80,5 +87,39 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+fn track_masks(frames: &[SynthFrame]) -> usize {
+    let mut t = Tracker::new(Config::masks()).expect("config");
+    let mut n = 0;
+    for f in frames {
+        let frame = f.frame().expect("frame");
+        n += t.update(Some(&frame), &f.detections).expect("track").len();
+    }
+    n
+}
+
+fn bench_masks(c: &mut Criterion) {
+    // linfa's k-means would otherwise use a rayon pool; the browser has one thread.
+    std::env::set_var("RAYON_NUM_THREADS", "1");
+    let mut g = c.benchmark_group("track_mask_mode");
+    g.sample_size(10);
+    let demo = SynthConfig {
+        frames: 150,
+        ..SynthConfig::demo()
+    };
+    let occlusion = SynthConfig {
+        shapes: 10,
+        frames: 150,
+        ..SynthConfig::occlusion_scene(1)
+    };
+    for (name, cfg) in [("demo_1280x720", demo), ("occlusion_640x480", occlusion)] {
+        let frames: Vec<SynthFrame> = Scene::new(cfg).expect("scene").collect();
+        g.throughput(Throughput::Elements(frames.len() as u64));
+        g.bench_with_input(BenchmarkId::new("synth", name), &frames, |b, f| {
+            b.iter(|| black_box(track_masks(f)))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_masks);
 criterion_main!(benches);

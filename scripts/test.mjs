@@ -54,8 +54,8 @@ const steps = [
   { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--no-fail-fast']) },
   { name: 'build wasm', needs: ['setup'], run: () => buildWasm() },
   {
-    // In release, after `build wasm`: the dependencies are the ones that build just compiled,
-    // so this step only compiles the test crates (minutes saved on a clean CI run).
+    // In release (opt-level 3, like the native tests), not the browser build's size-optimised
+    // `wasm-release` profile: its fat LTO would relink every test binary slowly.
     name: 'wasm-bindgen tests',
     needs: ['setup'],
     run: () =>

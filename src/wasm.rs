@@ -973,6 +973,11 @@ pub struct TermsOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub giou: Option<TermOptions>,
+    /// How much of the detection's box lies outside the (grown) predicted box: a partly
+    /// hidden shape lies inside its whole predicted box.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub ioa: Option<TermOptions>,
     /// Centre distance.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1021,11 +1026,29 @@ pub struct MotionOptions {
     pub std_measurement: Option<f64>,
 }
 
+/// The starting point of a tracker's settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, Tsify)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// The core's defaults (`Config::default()`), tuned on MOTChallenge boxes.
+    #[default]
+    Default,
+    /// The mask preset (`Config::masks()`): instance masks with frames, appearance in
+    /// ambiguous clusters, re-identification by colour and SIFT, amodal completion, fragment
+    /// merging.
+    Masks,
+}
+
 /// The tracker's settings (the core's `track::Config`, every field optional: absent fields keep
-/// the core's documented defaults). A test checks this mirrors the core's fields exactly.
+/// the preset's values, by default the core's documented defaults). A test checks this mirrors
+/// the core's fields exactly.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
 #[serde(default, deny_unknown_fields)]
 pub struct TrackerConfig {
+    /// What the other fields apply over: `"default"` (the core's defaults) or `"masks"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub preset: Option<Preset>,
     /// Detections scoring below this are ignored.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1113,14 +1136,66 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub motion: Option<MotionOptions>,
+    /// Lost tracks are matched only by re-identification (appearance), not by the main
+    /// association.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub lost_reid_only: Option<bool>,
+    /// A track being confirmed first looks for a lost track it re-identifies and takes its id.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub reid_at_confirmation: Option<bool>,
+    /// Mask features and when appearance is computed (the core's `track::AppearanceConfig`:
+    /// `shell`, `sift`, `colour`, `shape_context`, `lazy`, `ambiguity`, `refresh`,
+    /// `whole_ratio`); checked by the core, unknown fields are errors.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional, type = "Record<string, unknown>")]
+    pub appearance: Option<serde_json::Value>,
+    /// How the shape context cost fits its transform: thesis Alg. 4 or Alg. 5.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional, type = "\"Contour\" | \"Sift\"")]
+    pub shape_variant: Option<String>,
+    /// SIFT matching (`ratio`, `cross_check`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional, type = "{ ratio?: number, cross_check?: boolean }")]
+    pub sift_matching: Option<serde_json::Value>,
+    /// Fewest keypoints on both sides for the SIFT term to have data.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub sift_min_keypoints: Option<u32>,
+    /// Update a partly hidden mask's track with the box of its whole shape.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub amodal: Option<bool>,
+    /// Below this fraction of its reference area a matched mask does not correct the motion.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub sliver_ratio: Option<f64>,
+    /// Merge a shape the detector split in two before its track is updated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub merge_fragments: Option<bool>,
+    /// Frames a confirmed track last seen whole may go undetected and still be reported at
+    /// its predicted place.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub coast_frames: Option<u32>,
 }
 
 impl TrackerConfig {
-    /// The core config: the given fields over the defaults (the core config and its parts all
-    /// take defaults for absent fields, so a JSON round trip does the overlay).
+    /// The core config: the given fields over the preset, nested objects merged field by
+    /// field ([`TrackConfig::overlay`]).
     pub fn to_core(&self) -> Result<TrackConfig, JsValue> {
-        let v = serde_json::to_value(self).map_err(js_error)?;
-        serde_json::from_value(v).map_err(js_error)
+        let base = match self.preset.unwrap_or_default() {
+            Preset::Default => TrackConfig::default(),
+            Preset::Masks => TrackConfig::masks(),
+        };
+        let patch = TrackerConfig {
+            preset: None,
+            ..self.clone()
+        };
+        let v = serde_json::to_value(&patch).map_err(js_error)?;
+        base.overlay(&v).map_err(js_error)
     }
 }
 
@@ -1244,6 +1319,11 @@ pub struct FillOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional, type = "\"linear\" | \"kalman\"")]
     pub trajectory: Option<Trajectory>,
+    /// Gaps between two partial mask views (below this fraction of the shape's usual area)
+    /// are hides and are not filled (0: fill them too).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub hidden_ratio: Option<f64>,
 }
 
 /// SIFT detector settings for the appearance snapshots (the core's `SiftConfig`).

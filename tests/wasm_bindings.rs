@@ -267,6 +267,49 @@ fn tracker_config_type_mirrors_the_core_config_exactly() {
 }
 
 #[wasm_bindgen_test]
+fn mask_preset_is_reachable_from_js_and_overridable() {
+    use shapetrack::track::Config;
+    // The whole mask preset round-trips through the mirror too (its nested appearance parts).
+    let core = serde_json::to_value(Config::masks()).unwrap();
+    let mirror: TrackerConfig = serde_json::from_value(core.clone()).unwrap();
+    assert_eq!(serde_json::to_value(&mirror).unwrap(), core);
+    assert_eq!(mirror.to_core().unwrap(), Config::masks());
+    // `preset: "masks"` starts from the preset; named fields (nested ones field by field)
+    // apply over it, not over the box-mode defaults.
+    let mirror: TrackerConfig =
+        serde_json::from_value(serde_json::json!({ "preset": "masks" })).unwrap();
+    assert_eq!(mirror.to_core().unwrap(), Config::masks());
+    let mirror: TrackerConfig = serde_json::from_value(serde_json::json!({
+        "preset": "masks", "high_score": 0.25, "reid_terms": { "colour": { "gate": 0.4 } }
+    }))
+    .unwrap();
+    let cfg = mirror.to_core().unwrap();
+    let masks = Config::masks();
+    assert_eq!(cfg.high_score, 0.25);
+    assert_eq!(cfg.reid_terms.colour.gate, Some(0.4));
+    assert_eq!(cfg.reid_terms.colour.weight, masks.reid_terms.colour.weight);
+    assert_eq!(cfg.max_lost, masks.max_lost);
+    assert!(cfg.lost_reid_only && cfg.merge_fragments);
+    assert_ne!(cfg.max_lost, Config::default().max_lost);
+    // Through the JS entry point; an unknown preset or nested field is an error.
+    assert!(Tracker::new(
+        Some(ts(js(&serde_json::json!({ "preset": "masks" })))),
+        None
+    )
+    .is_ok());
+    for bad in [
+        serde_json::json!({ "preset": "mask" }),
+        serde_json::json!({ "preset": "masks", "appearance": { "lazzy": true } }),
+        serde_json::json!({ "shape_variant": "Fourier" }),
+    ] {
+        assert!(
+            Tracker::new(Some(ts(js(&bad))), None).is_err(),
+            "{bad} accepted"
+        );
+    }
+}
+
+#[wasm_bindgen_test]
 fn partial_tracker_config_overrides_only_what_it_names() {
     let partial = serde_json::json!({ "max_lost": 60, "terms": { "iou": { "weight": 0.25 } } });
     let mirror: TrackerConfig = serde_json::from_value(partial).unwrap();

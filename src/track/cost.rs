@@ -113,6 +113,30 @@ impl PairCost for GiouCost {
     }
 }
 
+/// `1 − |D ∩ P| / |D|` between the detection's box `D` and the predicted box `P` grown by a
+/// buffer: 0 when the detection lies inside where the track is expected (whole or partly
+/// hidden), 1 when it lies outside. The buffer widens by `per_miss` for every frame the track
+/// went unmatched, as the prediction's uncertainty does (a velocity off by 10% puts a shape
+/// hidden for 20 frames two frames' motion away from where it is predicted).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IoaCost {
+    /// Scale factor of the predicted box: 1 = as predicted.
+    pub buffer: f64,
+    /// Growth of the scale factor per missed frame.
+    pub per_miss: f64,
+}
+
+impl PairCost for IoaCost {
+    fn name(&self) -> &str {
+        "ioa"
+    }
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let scale = self.buffer + self.per_miss * track.misses() as f64;
+        let p = buffered(&track.predicted_box(), scale);
+        Some(1.0 - det.detection.bbox.ioa(&p))
+    }
+}
+
 /// Distance between the predicted and detected centres, over `scale` times the predicted
 /// box's diagonal, clipped to 1.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -229,6 +253,12 @@ impl CostModel {
     /// The built-in geometric and motion terms of `terms` that have a positive weight. The
     /// appearance terms are not built in: their modules register them with [`CostModel::push`].
     pub fn from_terms(terms: &Terms) -> Self {
+        Self::from_terms_with(terms, 0.0)
+    }
+
+    /// [`CostModel::from_terms`], with the IoA term's buffer widening by `ioa_per_miss` per
+    /// missed frame.
+    pub fn from_terms_with(terms: &Terms, ioa_per_miss: f64) -> Self {
         let mut m = Self::default();
         let t = terms;
         m.push(
@@ -240,6 +270,14 @@ impl CostModel {
         );
         m.push(Box::new(LastIouCost), t.last_iou.weight, t.last_iou.gate);
         m.push(Box::new(GiouCost), t.giou.weight, t.giou.gate);
+        m.push(
+            Box::new(IoaCost {
+                buffer: t.ioa.scale,
+                per_miss: ioa_per_miss,
+            }),
+            t.ioa.weight,
+            t.ioa.gate,
+        );
         m.push(
             Box::new(CentreDistanceCost {
                 scale: t.centre.scale,
@@ -296,21 +334,56 @@ impl CostModel {
     }
 
     /// The combined cost of every candidate pair of `regions` (`None` = not allowed), in the
-    /// order of `regions.pairs`.
+    /// order of `regions.pairs` ([`CostModel::score_pairs`]'s `cost`).
     pub fn score(
         &self,
         tracks: &[Track],
         dets: &[Candidate<'_>],
         regions: &Regions,
     ) -> Vec<Option<f64>> {
+        self.score_pairs(tracks, dets, regions)
+            .into_iter()
+            .map(|s| s.map(|s| s.cost))
+            .collect()
+    }
+
+    /// Scores every candidate pair of `regions`, in the order of `regions.pairs`: `None` when
+    /// a term's gate rejects the pair (gates compare the *raw* term costs) or no term has data.
+    ///
+    /// Terms that [`PairCost::normalise_in_cluster`] are divided by their largest value in the
+    /// pair's cluster before combining into [`PairScore::cost`], which ranks the pairs of a
+    /// cluster (the assignment minimises it). Such values mean nothing across clusters (a
+    /// cluster where every candidate looks alike pins them all near 1), so
+    /// [`PairScore::absolute`], which the tracker's thresholds compare, combines only the
+    /// other terms.
+    pub fn score_pairs(
+        &self,
+        tracks: &[Track],
+        dets: &[Candidate<'_>],
+        regions: &Regions,
+    ) -> Vec<Option<PairScore>> {
         let nt = self.terms.len();
-        let mut raw: Vec<Option<f64>> = Vec::with_capacity(regions.pairs.len() * nt);
+        let np = regions.pairs.len();
+        let mut raw: Vec<Option<f64>> = Vec::with_capacity(np * nt);
         for &(ti, di) in &regions.pairs {
             match (tracks.get(ti), dets.get(di)) {
-                (Some(t), Some(d)) => raw.extend(self.terms.iter().map(|w| w.term.cost(t, d))),
+                (Some(t), Some(d)) => raw.extend(
+                    self.terms
+                        .iter()
+                        .map(|w| w.term.cost(t, d).filter(|c| c.is_finite())),
+                ),
                 _ => raw.extend(std::iter::repeat_n(None, nt)),
             }
         }
+        let gated: Vec<bool> = raw
+            .chunks(nt.max(1))
+            .map(|c| {
+                self.terms
+                    .iter()
+                    .zip(c)
+                    .any(|(t, c)| matches!((t.gate, c), (Some(g), Some(c)) if *c > g))
+            })
+            .collect();
         for (k, w) in self.terms.iter().enumerate() {
             if !w.term.normalise_in_cluster() {
                 continue;
@@ -318,27 +391,58 @@ impl CostModel {
             let mut max = vec![0.0f64; regions.clusters.len()];
             for (p, &cl) in regions.pair_cluster.iter().enumerate() {
                 if let (Some(Some(c)), Some(m)) = (raw.get(p * nt + k), max.get_mut(cl)) {
-                    if c.is_finite() {
-                        *m = m.max(*c);
-                    }
+                    *m = m.max(*c);
                 }
             }
             for (p, &cl) in regions.pair_cluster.iter().enumerate() {
                 let m = max.get(cl).copied().unwrap_or(0.0);
                 if let Some(Some(c)) = raw.get_mut(p * nt + k) {
-                    if m > 0.0 {
-                        *c /= m;
-                    }
+                    *c = if m > 0.0 {
+                        (*c / m).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
                 }
             }
         }
-        raw.chunks(nt.max(1))
-            .take(regions.pairs.len())
-            .map(|c| self.combine(c))
-            .chain(std::iter::repeat(None))
-            .take(regions.pairs.len())
+        let mean = |c: &[Option<f64>], only_absolute: bool| -> Option<f64> {
+            let (mut num, mut den) = (0.0, 0.0);
+            for (t, c) in self.terms.iter().zip(c) {
+                if only_absolute && t.term.normalise_in_cluster() {
+                    continue;
+                }
+                if let Some(c) = c {
+                    num += t.weight * c;
+                    den += t.weight;
+                }
+            }
+            (den > 0.0).then(|| num / den)
+        };
+        (0..np)
+            .map(|p| {
+                if gated.get(p).copied().unwrap_or(true) {
+                    return None;
+                }
+                let c = raw.get(p * nt..(p + 1) * nt)?;
+                let cost = mean(c, false)?;
+                Some(PairScore {
+                    cost,
+                    absolute: mean(c, true).unwrap_or(cost),
+                })
+            })
             .collect()
     }
+}
+
+/// The scores of one candidate pair (see [`CostModel::score_pairs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairScore {
+    /// Weighted mean of every term with data, the cluster-normalised ones normalised: what the
+    /// assignment minimises.
+    pub cost: f64,
+    /// Weighted mean of the terms that are not cluster-normalised (`cost` when only those have
+    /// data): what thresholds such as `max_cost` compare.
+    pub absolute: f64,
 }
 
 #[cfg(test)]

@@ -1,9 +1,13 @@
 //! The online tracker (thesis ch. 2.1, 3.3, 4.5): a phased update over a per-track Kalman
 //! filter, region estimation, pair-cost terms and optimal assignment; and the track lifecycle.
 //!
-//! - [`config`]: [`Config`], one documented set of parameters for every sequence.
+//! - [`config`]: [`Config`], one documented set of parameters for every sequence
+//!   ([`Config::masks`] for instance masks with frames).
+//! - [`features`]: [`MaskFeatures`], the per-detection features (shell; appearance on demand:
+//!   shape context, SIFT, colour).
 //! - [`cost`]: the [`PairCost`] trait, the built-in geometric/motion terms and their weighted,
 //!   renormalised combination (thesis eq. 39 generalised).
+//! - [`appearance`]: the appearance terms, C1 (shape context), C2 (colour) and SIFT.
 //! - [`regions`]: [`estimate_regions`], which pairs are worth scoring at all (thesis Alg. 2).
 //! - [`online`]: [`Tracker`] and its `update` phases.
 //! - [`sequence`]: whole-sequence helpers (records in, records out).
@@ -15,21 +19,25 @@
 //! the same id) → **removed**. Ids are handed out by each [`Tracker`] when a track is
 //! confirmed, so they are dense, start at 1, and two trackers never share a counter.
 
+pub mod appearance;
 pub mod config;
 pub mod cost;
+pub mod features;
 mod lifecycle;
 pub mod offline;
 pub mod online;
 pub mod regions;
 pub mod sequence;
 
+pub use appearance::{ColourCost, ColourMode, ShapeContextCost, ShapeVariant, SiftCost, TrackSide};
 pub use config::{Config, TermConfig, Terms};
 pub use cost::{
-    Candidate, CentreDistanceCost, CostModel, GiouCost, IouCost, LastIouCost, MahalanobisCost,
-    MaskIouCost, PairCost, SizeCost, WeightedTerm,
+    Candidate, CentreDistanceCost, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,
+    MahalanobisCost, MaskIouCost, PairCost, SizeCost, WeightedTerm,
 };
+pub use features::{Appearance, AppearanceConfig, MaskFeatures, Needs, ShellMode};
 pub use lifecycle::Track;
-pub use online::{BoxFeatures, FeatureExtractor, Features, Tracker};
+pub use online::{BoxFeatures, FeatureExtractor, Features, PhaseTimes, Tracker};
 pub use regions::{estimate_regions, Cluster, Regions};
 pub use sequence::{detections_by_frame, to_records, track_sequence};
 
@@ -69,6 +77,20 @@ pub enum TrackError {
         index: usize,
         /// What went wrong.
         message: String,
+    },
+    /// The frame's size differs from the previous frames'.
+    #[error(
+        "frame is {width}x{height}, but earlier frames were {expected_width}x{expected_height}"
+    )]
+    FrameSize {
+        /// Width of this frame.
+        width: u32,
+        /// Height of this frame.
+        height: u32,
+        /// Width of the earlier frames.
+        expected_width: u32,
+        /// Height of the earlier frames.
+        expected_height: u32,
     },
     /// A motion filter rejected its input.
     #[error("motion filter: {0}")]

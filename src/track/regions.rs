@@ -7,8 +7,8 @@
 //! the tracks' predicted boxes grown by a margin and the detections' boxes, and a sort-and-sweep
 //! broad phase on x keeps the search O((n + m) log m + pairs) instead of O(n·m).
 //!
-//! The mask pipeline swaps [`estimate_regions`] for the geometry module's `region_clusters` on
-//! convex shells; the tracker only depends on the [`Regions`] it returns.
+//! The mask pipeline swaps [`estimate_regions`] for [`crate::region::region_clusters`] on
+//! convex shells (converted with `Regions::from`); the tracker only depends on [`Regions`].
 
 use crate::frame::BBox;
 
@@ -30,6 +30,39 @@ pub struct Regions {
     pub pair_cluster: Vec<usize>,
     /// Clusters with at least one pair, ordered by their smallest track index.
     pub clusters: Vec<Cluster>,
+}
+
+impl From<crate::region::RegionEstimate> for Regions {
+    /// The region clusters of the mask pipeline (GJK on convex shells) in the tracker's form.
+    fn from(e: crate::region::RegionEstimate) -> Self {
+        let n = e.pairs.iter().map(|p| p.0 + 1).max().unwrap_or(0);
+        let mut cluster_of_track = vec![usize::MAX; n];
+        for (k, c) in e.clusters.iter().enumerate() {
+            for &t in &c.tracks {
+                if let Some(slot) = cluster_of_track.get_mut(t) {
+                    *slot = k;
+                }
+            }
+        }
+        // Every pair's track belongs to exactly one cluster (clusters partition the graph).
+        let pair_cluster = e
+            .pairs
+            .iter()
+            .map(|&(t, _)| cluster_of_track.get(t).copied().unwrap_or(0))
+            .collect();
+        Regions {
+            pairs: e.pairs,
+            pair_cluster,
+            clusters: e
+                .clusters
+                .into_iter()
+                .map(|c| Cluster {
+                    tracks: c.tracks,
+                    dets: c.detections,
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Strict overlap of two boxes with positive area; zero-size shells meet nothing.

@@ -106,7 +106,8 @@ test('offline mode tracks the whole sequence with a progress bar, then the offli
   assert.ok(st.offline, 'the offline pass ran');
   assert.ok(st.offline.ids <= st.offline.onlineIds);
   const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
-  assert.equal(records.filter((/** @type {any} */ r) => r.interpolated).length, st.offline.filled);
+  // (The online pass coasts over single missed detections, flagging those shapes too.)
+  assert.equal(records.filter((/** @type {any} */ r) => r.interpolated).length, st.offline.onlineInterpolated + st.offline.filled);
   t.diagnostic(
     `VOT bag, ${FRAMES} frames: ids ${st.offline.onlineIds} online → ${st.offline.ids} offline ` +
       `(${st.offline.joins} joins, ${st.offline.filled} filled); finish() ${st.offline.ms.toFixed(0)} ms`,

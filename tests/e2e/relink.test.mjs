@@ -6,6 +6,11 @@
 // re-linker's phases; filled spans hatched on the timeline and dashed on the overlay; the
 // interpolated flag in a CVAT export read back; and merge/undo on the re-linked ids (undo
 // goes back to the online result).
+//
+// The tracker runs with the box-mode defaults (`?preset=default`): there the online pass breaks
+// tracks at the bars and the re-linker has joining to do. With the app's mask preset the online
+// pass already re-identifies most of them by colour and SIFT (occlusion seed 0: 11 ids, IDSW 6
+// online, the same offline; `cargo run --release --example demo_presets`).
 
 import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -72,7 +77,7 @@ async function runScene(page, mode) {
       });
     });
   });
-  await page.goto(`${server.url}?scene=occlusion&speed=max&mode=${mode}`);
+  await page.goto(`${server.url}?scene=occlusion&speed=max&mode=${mode}&preset=default`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   await page.waitForFunction(
     ([n, m]) => {
@@ -127,7 +132,8 @@ function edgeCoverage(page, box) {
     const x1 = Math.floor((b.x + b.w) * k) - 2;
     const d = ctx.getImageData(x0, y, x1 - x0, 1).data;
     let on = 0;
-    for (let i = 3; i < d.length; i += 4) if (d[i] > 0) on++;
+    // Half-opaque or more: anti-aliased fringes at the dash ends do not count.
+    for (let i = 3; i < d.length; i += 4) if (d[i] >= 128) on++;
     return on / (d.length / 4);
   }, box);
 }
@@ -209,26 +215,41 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   assert.equal(new Set(solid.pixels).size, 1, `observed span solid: ${[...new Set(solid.pixels)]}`);
 
   // The overlay draws a filled shape dashed: gaps along its outline, unlike a detected one.
-  const lone = (/** @type {Rec} */ r, /** @type {Rec[]} */ all) =>
-    all.every(
-      (o) =>
-        o === r ||
-        o.bbox.x > r.bbox.x + r.bbox.w + 12 ||
-        o.bbox.x + o.bbox.w + 12 < r.bbox.x ||
-        o.bbox.y > r.bbox.y + r.bbox.h + 12 ||
-        o.bbox.y + o.bbox.h + 12 < r.bbox.y,
-    );
-  const dashed = filled.find((r) => lone(r, offline.filter((o) => o.frame === r.frame)));
-  assert.ok(dashed, 'a filled shape apart from the others');
-  await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.deselect());
-  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), dashed.frame);
-  await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, dashed.frame);
-  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
-  const here = offline.filter((o) => o.frame === dashed.frame);
-  const seen = here.find((r) => !r.interpolated && lone(r, here));
-  assert.ok(seen, 'a detected shape apart from the others in the same frame');
-  const dashedCover = await edgeCoverage(page, dashed.bbox);
-  const solidCover = await edgeCoverage(page, seen.bbox);
+  // The overlay draws a filled shape dashed: gaps along its outline, unlike a detected one.
+  // Filled shapes are mostly where objects cross (the background subtractor merges touching
+  // objects, so their detections go missing there), under other outlines; so the other
+  // records of the frame are deleted first (undoable edits, undone right after), and masks and
+  // trails hidden, leaving only the outline measured along the box's bottom edge.
+  /**
+   * Share of the bottom edge of `id`'s box painted in frame `f`, drawn alone.
+   * @param {number} f
+   * @param {number} id
+   */
+  const aloneCoverage = async (f, id) => {
+    const app = async (/** @type {string} */ expr, /** @type {any} */ arg) =>
+      page.evaluate(([e, a]) => new Function('app', 'arg', `return (${e})`)(/** @type {any} */ (window).__shapetrack.app, a), [expr, arg]);
+    await app('app.seek(arg)', f);
+    await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, f);
+    const others = [...new Set(offline.filter((o) => o.frame === f && o.id !== id).map((o) => o.id))];
+    for (const o of others) {
+      await app('app.select(arg, false)', o);
+      await app("app.action('deleteRecord')", null);
+    }
+    await app('app.deselect()', null);
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+    const box = offline.find((o) => o.frame === f && o.id === id)?.bbox;
+    assert.ok(box);
+    const cover = await edgeCoverage(page, box);
+    for (const _ of others) await app("app.action('undo')", null);
+    return cover;
+  };
+  await page.evaluate(() => Object.assign(/** @type {any} */ (window).__shapetrack.app.options, { masks: false, trails: false }));
+  const dashed = filled.reduce((a, b) => (b.bbox.w > a.bbox.w ? b : a));
+  const seen = offline.filter((r) => r.id === dashed.id && !r.interpolated).reduce((a, b) => (Math.abs(b.frame - dashed.frame) < Math.abs(a.frame - dashed.frame) ? b : a));
+  const dashedCover = await aloneCoverage(dashed.frame, dashed.id);
+  const solidCover = await aloneCoverage(seen.frame, seen.id);
+  await page.evaluate(() => Object.assign(/** @type {any} */ (window).__shapetrack.app.options, { masks: true, trails: true }));
+  assert.deepEqual((await records(page)).map(key), offline.map(key), 'the deletions were undone');
   assert.ok(dashedCover > 0.2 && dashedCover < 0.85, `dashed outline: ${dashedCover.toFixed(2)} of its edge painted`);
   assert.ok(solidCover > 0.95, `solid outline: ${solidCover.toFixed(2)} of its edge painted`);
   t.diagnostic(`outline painted: filled ${dashedCover.toFixed(2)}, detected ${solidCover.toFixed(2)}`);

@@ -65,11 +65,19 @@ export class App {
     this.detector = 'background';
     /** @type {import('../pkg/shapetrack.js').ScenePreset} the synthetic scene the demo opens */
     this.scene = 'demo';
+    /**
+     * Tracker settings over the detector's own (`?preset=default` starts from the core's box-mode
+     * defaults instead of the mask preset the mask detectors use); null: the detector's.
+     * @type {import('../pkg/shapetrack.js').TrackerConfig | null}
+     */
+    this.tracker = null;
     /** Whether the open session can run the offline pass (a source with an end). */
     this.offlineCapable = false;
     /**
-     * What the last offline pass did: ids before and after, joins, filled-in records, time.
-     * @type {{ onlineIds: number, ids: number, joins: number, filled: number, ms: number } | null}
+     * What the last offline pass did: ids before and after, joins, filled-in records, time; and
+     * how many records the online pass had already flagged interpolated (coasted over a missed
+     * detection, mask preset).
+     * @type {{ onlineIds: number, onlineInterpolated: number, ids: number, joins: number, filled: number, ms: number } | null}
      */
     this.offlineReport = null;
     /** @type {{ a: number | null, b: number | null }} */
@@ -139,6 +147,7 @@ export class App {
     const opened = await this.worker.open({
       source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: this.scene },
       detector: this.detector,
+      ...(this.tracker ? { tracker: this.tracker } : {}),
       offline: src?.kind !== 'webcam',
     });
     /** @type {AnySource} */
@@ -269,11 +278,12 @@ export class App {
         if (name) this.status(`offline pass: ${name}…`);
       });
       const onlineIds = this.model.table.ids().length;
+      const onlineInterpolated = this.model.table.all().filter((r) => r.interpolated).length;
       const applied = this.model.relink({ joins: res.joins, filled: res.filled });
       this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
       this.finished = true;
       const ids = this.model.table.ids().length;
-      this.offlineReport = { onlineIds, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
+      this.offlineReport = { onlineIds, onlineInterpolated, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
       const skipped = res.joins.length - applied.joined;
       this.status(
         `offline pass: ${onlineIds} → ${ids} tracks (${applied.joined} joins, ${applied.filled} shapes filled in, ` +

@@ -4,7 +4,8 @@
 //
 // URL parameters: `?demo=0` does not start the demo on load; `?speed=max` tracks as fast as
 // possible instead of at the source's frame rate; `?mode=offline`; `?scene=occlusion` (or
-// `default`) opens another synthetic scene as the demo.
+// `default`) opens another synthetic scene as the demo; `?preset=default` (or `masks`) chooses
+// the tracker's settings preset over the detector's choice.
 
 import { loadCore } from './lib/core.js';
 import { App } from './app.js';
@@ -27,6 +28,8 @@ async function main() {
   }
   const scene = params.get('scene');
   if (scene === 'demo' || scene === 'default' || scene === 'occlusion') app.scene = scene;
+  const preset = params.get('preset');
+  if (preset === 'default' || preset === 'masks') app.tracker = { preset };
   if (params.get('mode') === 'offline') {
     app.mode = 'offline';
     byId('mode', HTMLSelectElement).value = 'offline';

@@ -1,10 +1,203 @@
-//! `shapetrack bench` (being built; replaced by its owner).
+//! `shapetrack bench`: frames per second of the online tracker, and where the time goes, on
+//! synthetic scenes by resolution, number of shapes and mode (boxes without frames, or masks
+//! with frames and the mask preset), single-threaded.
+//!
+//! Each scene is rendered first (not timed); then the tracker runs over its frames with a
+//! clock ([`Tracker::with_clock`]), which splits the time into the phases of
+//! [`shapetrack::track::PhaseTimes`]. `fps` counts the tracker only: no rendering, no
+//! detection, no file input/output.
+
+use serde::Serialize;
+use shapetrack::synth::{Scene, SynthConfig, SynthFrame};
+use shapetrack::track::{Config, PhaseTimes, Tracker};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Tracking modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Box detections, no frames, default config (MOTChallenge det.txt style).
+    Box,
+    /// Mask detections with their frames, mask preset (appearance where needed).
+    Mask,
+}
 
 /// Arguments of `shapetrack bench`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Frame sizes, `WxH`, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "640x480,1280x720")]
+    resolutions: Vec<String>,
+    /// Numbers of shapes alive at once, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "5,10,20,50")]
+    shapes: Vec<u32>,
+    /// Modes, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "box,mask")]
+    modes: Vec<Mode>,
+    /// Frames per scene.
+    #[arg(long, default_value_t = 100)]
+    frames: u32,
+    /// Scene seed.
+    #[arg(long, default_value_t = 7)]
+    seed: u64,
+    /// Also write the rows as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// One measured configuration. Times are milliseconds per frame.
+#[derive(Debug, Serialize)]
+struct Row {
+    width: u32,
+    height: u32,
+    shapes: u32,
+    mode: Mode,
+    frames: u64,
+    detections_per_frame: f64,
+    fps: f64,
+    ms_per_frame: f64,
+    features_ms: f64,
+    regions_ms: f64,
+    costs_ms: f64,
+    assignment_ms: f64,
+    update_ms: f64,
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .trim()
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("resolution {s:?}: expected WxH, e.g. 640x480"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("resolution {s:?}: {v:?} is not a positive integer"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn measure(frames: &[SynthFrame], mode: Mode) -> Result<PhaseTimes, Box<dyn std::error::Error>> {
+    let config = match mode {
+        Mode::Box => Config::default(),
+        Mode::Mask => Config::masks(),
+    };
+    let start = Instant::now();
+    let mut tracker = Tracker::new(config)?.with_clock(move || start.elapsed().as_secs_f64());
+    for f in frames {
+        match mode {
+            Mode::Box => tracker.update(None, &f.box_detections)?,
+            Mode::Mask => tracker.update(Some(&f.frame()?), &f.detections)?,
+        };
+    }
+    Ok(tracker.phase_times())
+}
 
 /// Runs the subcommand.
-pub fn run(_args: Args) -> crate::CliResult {
-    Err("this subcommand is not built yet".into())
+pub fn run(args: Args) -> crate::CliResult {
+    // Single-threaded: linfa's k-means would otherwise spread over a rayon pool, which the
+    // browser (wasm32) does not have. The pool reads this when it first starts, below.
+    std::env::set_var("RAYON_NUM_THREADS", "1");
+    if args.frames == 0 {
+        return Err("--frames must be at least 1".into());
+    }
+    let resolutions = args
+        .resolutions
+        .iter()
+        .map(|r| parse_resolution(r))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut rows = Vec::new();
+    println!(
+        "{:>9} {:>6} {:>4} {:>7} {:>8} {:>9} | {:>8} {:>7} {:>7} {:>7} {:>7}  (ms/frame)",
+        "size",
+        "shapes",
+        "mode",
+        "dets/f",
+        "fps",
+        "ms/frame",
+        "features",
+        "regions",
+        "costs",
+        "assign",
+        "update"
+    );
+    for &(width, height) in &resolutions {
+        for &shapes in &args.shapes {
+            let cfg = SynthConfig {
+                seed: args.seed,
+                frames: args.frames,
+                shapes,
+                width,
+                height,
+                ..SynthConfig::default()
+            };
+            let frames: Vec<SynthFrame> = Scene::new(cfg)?.collect();
+            let dets = frames.iter().map(|f| f.detections.len()).sum::<usize>() as f64
+                / frames.len().max(1) as f64;
+            for &mode in &args.modes {
+                let t = measure(&frames, mode)?;
+                let n = t.frames.max(1) as f64;
+                let ms = |s: f64| 1e3 * s / n;
+                let total = t.total();
+                let row = Row {
+                    width,
+                    height,
+                    shapes,
+                    mode,
+                    frames: t.frames,
+                    detections_per_frame: dets,
+                    fps: if total > 0.0 {
+                        n / total
+                    } else {
+                        f64::INFINITY
+                    },
+                    ms_per_frame: ms(total),
+                    features_ms: ms(t.features),
+                    regions_ms: ms(t.regions),
+                    costs_ms: ms(t.costs),
+                    assignment_ms: ms(t.assignment),
+                    update_ms: ms(t.update),
+                };
+                println!(
+                    "{:>9} {:>6} {:>4} {:>7.1} {:>8.0} {:>9.3} | {:>8.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3}",
+                    format!("{width}x{height}"),
+                    shapes,
+                    match mode {
+                        Mode::Box => "box",
+                        Mode::Mask => "mask",
+                    },
+                    row.detections_per_frame,
+                    row.fps,
+                    row.ms_per_frame,
+                    row.features_ms,
+                    row.regions_ms,
+                    row.costs_ms,
+                    row.assignment_ms,
+                    row.update_ms
+                );
+                rows.push(row);
+            }
+        }
+    }
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&rows)?;
+        shapetrack::io::write_text(path, &text)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolutions_parse() {
+        assert_eq!(parse_resolution("640x480"), Ok((640, 480)));
+        assert_eq!(parse_resolution(" 1280X720 "), Ok((1280, 720)));
+        assert!(parse_resolution("640").is_err());
+        assert!(parse_resolution("0x10").is_err());
+        assert!(parse_resolution("ax10").is_err());
+    }
 }

@@ -52,7 +52,8 @@ pub struct Args {
     #[arg(long)]
     pub offline: bool,
     /// Offline configuration (JSON `{"online": …, "relink": …, "fill": …, "appearance": …}`;
-    /// missing fields take their defaults). `--config`, when given, replaces its `online` part.
+    /// missing fields take their defaults). Its `online` part merges over `--config` (or over
+    /// the preset for the input when `--config` is not given).
     #[arg(long, requires = "offline")]
     pub offline_config: Option<PathBuf>,
     /// Also write the joins the re-linker made (JSON list of `{slave, master, slave_last,
@@ -65,7 +66,8 @@ pub struct Args {
     /// Output format (default: from the extension: `.json` COCO-video, `.xml` CVAT, else MOT).
     #[arg(long, value_enum)]
     pub format: Option<Format>,
-    /// Tracker configuration (JSON; missing fields take their defaults).
+    /// Tracker configuration (JSON; missing fields take their defaults: `Config::default()`
+    /// for boxes, `Config::masks()` for MOTS masks).
     #[arg(long)]
     pub config: Option<PathBuf>,
 }
@@ -107,26 +109,52 @@ fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
         })
 }
 
+/// `base` with the fields given in the JSON `text` replaced (see [`Config::overlay`]).
+fn config_over(base: &Config, text: &str) -> Result<Config, serde_json::Error> {
+    base.overlay_json(text)
+}
+
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
-    let online_config = match &args.config {
-        Some(p) => {
-            Some(Config::from_json(&read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?)
-        }
-        None => None,
-    };
-    let mut offline_config = match &args.offline_config {
-        Some(p) => {
-            OfflineConfig::from_json(&read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?
-        }
-        None => OfflineConfig::default(),
-    };
-    if let Some(c) = &online_config {
-        offline_config.online = c.clone();
-    }
     let det_name = args.det.display().to_string();
     let text = read_text(&args.det)?;
     let mots = is_mots(&text);
+    // Masks get the mask preset (appearance, amodal completion, re-identification by colour
+    // and SIFT when frames are given); a JSON config fills its missing fields from it too.
+    let base = if mots {
+        Config::masks()
+    } else {
+        Config::default()
+    };
+    let online_config = match &args.config {
+        Some(p) => {
+            config_over(&base, &read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?
+        }
+        None => base,
+    };
+    let mut offline_config = OfflineConfig {
+        online: online_config.clone(),
+        ..OfflineConfig::default()
+    };
+    if let Some(p) = &args.offline_config {
+        let text = read_text(p)?;
+        let from_file =
+            OfflineConfig::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?;
+        // The file's `online` section, when present, merges over --config (or the preset);
+        // without one, the online pass is the one --config (or the preset) describes.
+        let online_section = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("online").cloned());
+        let online = match online_section {
+            Some(section) => config_over(&online_config, &section.to_string())
+                .map_err(|e| format!("{}: {e}", p.display()))?,
+            None => online_config.clone(),
+        };
+        offline_config = OfflineConfig {
+            online,
+            ..from_file
+        };
+    }
     let records = if mots {
         parse_mots(&text, &det_name)?
     } else {
@@ -170,7 +198,7 @@ pub fn run(args: Args) -> crate::CliResult {
     let mut online = if args.offline {
         None
     } else {
-        Some(Tracker::new(online_config.unwrap_or_default())?)
+        Some(Tracker::new(online_config)?)
     };
     let mut offline = if args.offline {
         let t = OfflineTracker::new(offline_config, fps)?;
@@ -332,4 +360,25 @@ fn cvat(
         height,
     };
     write_cvat(records, &meta, &class_names(records))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_config_overrides_only_its_fields() {
+        let base = Config::masks();
+        let c = config_over(
+            &base,
+            r#"{"max_lost": 7, "terms": {"iou": {"weight": 2.0}}}"#,
+        )
+        .unwrap();
+        assert_eq!(c.max_lost, 7);
+        assert_eq!(c.terms.iou.weight, 2.0);
+        assert_eq!(c.terms.ioa, base.terms.ioa);
+        assert_eq!(c.coast_frames, base.coast_frames);
+        assert!(config_over(&base, r#"{"max_lots": 7}"#).is_err());
+        assert!(config_over(&base, "not json").is_err());
+    }
 }

@@ -111,6 +111,13 @@ pub struct FillConfig {
     pub within_tracks: bool,
     /// Path of the filled shapes. Default [`Trajectory::Linear`].
     pub trajectory: Trajectory,
+    /// Gaps between two *partial* mask views are hides, not missed detections, and are not
+    /// filled: both the shape before the gap and the one after it have a mask smaller than
+    /// this fraction of the median mask area of the identity's shapes near that end (it was
+    /// going behind something and coming out again). Masks are visible parts (MOTS, DAVIS,
+    /// COCO-video), and a mask for a shape nobody can see would be wrong. Box-only shapes are
+    /// always filled. 0 fills hides too. Default 0.5.
+    pub hidden_ratio: f64,
 }
 
 impl Default for FillConfig {
@@ -119,6 +126,7 @@ impl Default for FillConfig {
             max_gap: 10,
             within_tracks: true,
             trajectory: Trajectory::Linear,
+            hidden_ratio: 0.5,
         }
     }
 }
@@ -208,6 +216,13 @@ impl OfflineConfig {
         check("relink.gate_per_second", v, v >= 0.0, "must be ≥ 0")?;
         let v = r.max_size_ratio;
         check("relink.max_size_ratio", v, v >= 1.0, "must be ≥ 1")?;
+        let v = self.fill.hidden_ratio;
+        check(
+            "fill.hidden_ratio",
+            v,
+            (0.0..=1.0).contains(&v),
+            "must be in [0, 1]",
+        )?;
         let v = self.appearance.max_side as f64;
         check("appearance.max_side", v, v >= 8.0, "must be ≥ 8")?;
         self.appearance.sift.validate()?;

@@ -2,7 +2,9 @@
 //!
 //! After the joins, each identity's shapes are walked in frame order; a gap of `1..=max_gap`
 //! missing frames between two observed shapes `a` (before) and `b` (after) is filled when it
-//! lies between two joined tracks, or inside one track when `within_tracks` is set.
+//! lies between two joined tracks, or inside one track when `within_tracks` is set, unless it
+//! is a hide: both ends partial mask views (below `hidden_ratio` of the usual area), the shape
+//! going behind something and coming out again, where a visible-part mask would be wrong.
 //!
 //! - **Centroid**: along the configured [`Trajectory`]: the straight line from `a`'s centroid
 //!   to `b`'s at constant speed, or the two-sided constant-acceleration Kalman bridge.
@@ -61,6 +63,9 @@ pub(crate) fn fill_gaps(
             if !joined && !cfg.within_tracks {
                 continue;
             }
+            if cfg.hidden_ratio > 0.0 && is_hide(shapes, &idx[..k], &idx[k..], cfg.hidden_ratio) {
+                continue;
+            }
             let path = match cfg.trajectory {
                 Trajectory::Linear => linear_path(a.centroid, b.centroid, missing),
                 Trajectory::Kalman => {
@@ -81,6 +86,31 @@ pub(crate) fn fill_gaps(
         fraction: 1.0,
     });
     Ok(out)
+}
+
+/// Shapes on each side of a gap whose median mask area is the reference for that end.
+const HIDE_REFERENCE: usize = 10;
+
+/// Whether the gap between the last shape of `before` and the first of `after` (indices into
+/// `shapes`, in frame order) is a hide: both ends are masks smaller than `ratio` times the
+/// median mask area of up to [`HIDE_REFERENCE`] shapes on their side.
+fn is_hide(shapes: &[TrackedShape], before: &[usize], after: &[usize], ratio: f64) -> bool {
+    let partial = |side: &mut dyn Iterator<Item = &usize>, end: Option<&usize>| -> bool {
+        let Some(end_area) = end.and_then(|&i| shapes[i].mask.as_ref()).map(|m| m.area()) else {
+            return false;
+        };
+        let mut areas: Vec<u64> = side
+            .take(HIDE_REFERENCE)
+            .filter_map(|&i| shapes[i].mask.as_ref().map(|m| m.area()))
+            .collect();
+        if areas.is_empty() {
+            return false;
+        }
+        areas.sort_unstable();
+        let median = areas[areas.len() / 2] as f64;
+        (end_area as f64) < ratio * median
+    };
+    partial(&mut before.iter().rev(), before.last()) && partial(&mut after.iter(), after.first())
 }
 
 /// Centroids of the `missing` frames between `ca` and `cb` on the straight line.
@@ -220,6 +250,76 @@ mod tests {
             det_index: Some(0),
             interpolated: false,
         }
+    }
+
+    /// A track of 20×20 masks moving right, with `width(frame)` choosing each mask's width (a
+    /// shape going behind something shrinks) and frames `gap` missing.
+    fn masked_track(
+        gap: std::ops::RangeInclusive<u32>,
+        width: impl Fn(u32) -> f64,
+    ) -> Vec<TrackedShape> {
+        (1..=30)
+            .filter(|f| !gap.contains(f))
+            .map(|f| {
+                let b = BBox::new(2.0 * f64::from(f), 0.0, width(f), 20.0);
+                let mut s = shape(1, f, b);
+                s.mask = Some(Mask::from_bbox(&b));
+                s
+            })
+            .collect()
+    }
+
+    #[test]
+    fn gaps_between_partial_mask_views_are_hides_and_stay_empty() {
+        let fill = |shapes: &[TrackedShape], cfg: &FillConfig| {
+            let origin = vec![1; shapes.len()];
+            fill_gaps(
+                shapes,
+                &origin,
+                cfg,
+                &RelinkConfig::default(),
+                25.0,
+                &mut |_| {},
+            )
+            .unwrap()
+            .len()
+        };
+        let cfg = FillConfig::default();
+        // Going behind an occluder (shrinking to a quarter) and coming out (growing back).
+        let hide = masked_track(12..=16, |f| match f {
+            11 | 17 => 5.0,
+            10 | 18 => 10.0,
+            _ => 20.0,
+        });
+        assert_eq!(fill(&hide, &cfg), 0);
+        // Without the rule, the hide is filled like any gap.
+        let all = FillConfig {
+            hidden_ratio: 0.0,
+            ..FillConfig::default()
+        };
+        assert_eq!(fill(&hide, &all), 5);
+        // A missed detection between whole views, or with only one end partial, is filled.
+        assert_eq!(fill(&masked_track(12..=16, |_| 20.0), &cfg), 5);
+        let one_side = masked_track(12..=16, |f| if f == 11 { 5.0 } else { 20.0 });
+        assert_eq!(fill(&one_side, &cfg), 5);
+        // Boxes carry no area to judge by: always filled.
+        let boxes: Vec<TrackedShape> = hide
+            .iter()
+            .map(|s| TrackedShape {
+                mask: None,
+                ..s.clone()
+            })
+            .collect();
+        assert_eq!(fill(&boxes, &cfg), 5);
+        // Out-of-range ratios are config errors.
+        let bad = super::super::OfflineConfig {
+            fill: FillConfig {
+                hidden_ratio: 1.5,
+                ..FillConfig::default()
+            },
+            ..Default::default()
+        };
+        assert!(bad.validate().is_err());
     }
 
     #[test]

@@ -1,0 +1,206 @@
+//! Appearance pair-cost terms: the thesis' shape context C1 (Alg. 4 / Alg. 5) and spatial
+//! colour C2 (Alg. 6), and a SIFT match term, each reading the [`Appearance`] of the track
+//! and of the detection. A term has no data (and drops out, the other weights renormalising)
+//! unless both sides carry the part it reads: box mode, a missing frame, or a detection in a
+//! cluster where the tracker did not need appearance.
+//!
+//! C1 and C2 are normalised within the region cluster (thesis §4.3 step 4, Alg. 6 step 8):
+//! their raw values are only comparable between the pairs of one cluster. Their gates, when
+//! configured, apply to the raw values ([`super::CostModel`] gates before normalising).
+//!
+//! Which track appearance a term reads is its [`TrackSide`]: the latest one (main
+//! association: compare frame n with frame n+1, as the thesis) or the reference one, the last
+//! appearance computed while the shape was seen whole (re-identification after an occlusion,
+//! when the last view was a sliver at an occluder's edge).
+
+use crate::features::color::{color_cost, joint_palette, palette_distance, ColorConfig};
+use crate::features::shape_context::{match_shapes, shape_cost_from_matches, ShapeContextConfig};
+use crate::features::sift::{match_descriptors, MatchConfig};
+use crate::frame::Point;
+use serde::{Deserialize, Serialize};
+
+use super::cost::{Candidate, PairCost};
+use super::features::Appearance;
+use super::lifecycle::Track;
+
+/// Which of the track's appearances a term compares with the detection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TrackSide {
+    /// The latest appearance computed for the track.
+    Last,
+    /// The latest appearance computed while the track was seen whole (falls back to the
+    /// latest when there is none).
+    Reference,
+}
+
+impl TrackSide {
+    fn of(self, t: &Track) -> Option<&Appearance> {
+        match self {
+            TrackSide::Last => t.appearance(),
+            TrackSide::Reference => t.reference_appearance().or_else(|| t.appearance()),
+        }
+    }
+}
+
+fn det_appearance<'d>(d: &Candidate<'d>) -> Option<&'d Appearance> {
+    d.features?.appearance.as_deref()
+}
+
+/// How C1 fits the transform between two shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ShapeVariant {
+    /// Alg. 4: χ² matching of the contour vertices' log-polar histograms (default).
+    #[default]
+    Contour,
+    /// Alg. 5: the transform is fitted to SIFT keypoint matches; C1 is still measured on the
+    /// contour vertices. Falls back to the centroid alignment without enough matches.
+    Sift,
+}
+
+/// Thesis C1 (shape context): the symmetric sum of nearest contour-vertex distances after
+/// aligning the detection onto the track, in units of the track's median vertex distance.
+/// Normalised within the cluster.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeContextCost {
+    /// Descriptor and fitting settings (must be those the descriptors were built with).
+    pub config: ShapeContextConfig,
+    /// Alg. 4 or Alg. 5.
+    pub variant: ShapeVariant,
+    /// SIFT matching settings ([`ShapeVariant::Sift`] only).
+    pub matching: MatchConfig,
+    /// Which track appearance to compare.
+    pub side: TrackSide,
+}
+
+impl PairCost for ShapeContextCost {
+    fn name(&self) -> &str {
+        "shape_context"
+    }
+
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let (a, b) = (self.side.of(track)?, det_appearance(det)?);
+        let (sa, sb) = (a.shape.as_ref()?, b.shape.as_ref()?);
+        let m = match self.variant {
+            ShapeVariant::Contour => match_shapes(sa, sb, &self.config).ok()?,
+            ShapeVariant::Sift => {
+                let (ka, kb) = (a.sift.as_ref()?, b.sift.as_ref()?);
+                let pt = |k: &crate::features::sift::Keypoint| Point::new(k.x as f64, k.y as f64);
+                let pairs: Vec<(Point, Point)> = match_descriptors(ka, kb, &self.matching)
+                    .iter()
+                    .filter_map(|m| {
+                        Some((
+                            pt(ka.keypoints.get(m.query)?),
+                            pt(kb.keypoints.get(m.train)?),
+                        ))
+                    })
+                    .collect();
+                shape_cost_from_matches(sa.vertices(), sb.vertices(), &pairs, &self.config).ok()?
+            }
+        };
+        m.cost.is_finite().then_some(m.cost)
+    }
+
+    fn normalise_in_cluster(&self) -> bool {
+        true
+    }
+}
+
+/// How C2 compares two colour samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ColourMode {
+    /// Alg. 6: one joint k-means++ palette, the detection aligned onto the track by their
+    /// sample centroids, C2 = fraction of overlapping samples whose colours differ. Frames are
+    /// consecutive, so the motion between the two views is mostly a translation; aligning by
+    /// the shape context fit instead would fit the transform a second time per pair, and
+    /// would inherit its errors on partly occluded shapes. Normalised within the cluster.
+    #[default]
+    Aligned,
+    /// Alignment-free: Hellinger distance between the two label histograms over the joint
+    /// palette. Not normalised (an absolute colour distance gates a lone candidate).
+    Palette,
+    /// Alignment-free and partial-view tolerant: the fraction of the detection's samples whose
+    /// palette colour is rare (under 3% of the samples) in the track's view. A sliver of a
+    /// shape emerging from behind an occluder shows only some of its colours, all of them
+    /// present in the whole view: a histogram distance would call it a different shape, this
+    /// measure does not; a different shape brings colours the track never had. For
+    /// re-identification, against the track's reference (whole) view. Not normalised.
+    Contained,
+}
+
+/// Share of a label in a view's samples under which a detection's sample of that label counts
+/// as a colour the view does not have.
+const RARE_LABEL: f64 = 0.03;
+
+/// Thesis C2 (spatial colour), see [`ColourMode`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColourCost {
+    /// k-means and sampling settings.
+    pub config: ColorConfig,
+    /// Aligned (thesis) or palette-only.
+    pub mode: ColourMode,
+    /// Which track appearance to compare.
+    pub side: TrackSide,
+}
+
+impl PairCost for ColourCost {
+    fn name(&self) -> &str {
+        "colour"
+    }
+
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let (a, b) = (self.side.of(track)?, det_appearance(det)?);
+        let (ca, cb) = (a.colour.as_ref()?, b.colour.as_ref()?);
+        let c = match self.mode {
+            ColourMode::Aligned => color_cost(ca, cb, None, &self.config).ok()?.cost,
+            ColourMode::Palette => palette_distance(ca, cb, &self.config).ok()?,
+            ColourMode::Contained => {
+                let p = joint_palette(ca, cb, &self.config).ok()?;
+                let (ha, _) = p.histograms();
+                if p.labels_b.is_empty() {
+                    return None;
+                }
+                let foreign = p
+                    .labels_b
+                    .iter()
+                    .filter(|&&l| ha.get(l).copied().unwrap_or(0.0) < RARE_LABEL)
+                    .count();
+                foreign as f64 / p.labels_b.len() as f64
+            }
+        };
+        c.is_finite().then_some(c.clamp(0.0, 1.0))
+    }
+
+    fn normalise_in_cluster(&self) -> bool {
+        self.mode == ColourMode::Aligned
+    }
+}
+
+/// SIFT evidence: `1 − matches / min(|A|, |B|)`, matches by Lowe's ratio test, in `[0, 1]`.
+/// No data when either side has fewer than `min_keypoints` keypoints (a smooth shape has no
+/// texture to match, which says nothing about identity).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SiftCost {
+    /// Ratio test settings.
+    pub matching: MatchConfig,
+    /// Fewest keypoints on each side for the term to have data.
+    pub min_keypoints: usize,
+    /// Which track appearance to compare.
+    pub side: TrackSide,
+}
+
+impl PairCost for SiftCost {
+    fn name(&self) -> &str {
+        "sift"
+    }
+
+    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
+        let (a, b) = (self.side.of(track)?, det_appearance(det)?);
+        let (ka, kb) = (a.sift.as_ref()?, b.sift.as_ref()?);
+        let n = ka.len().min(kb.len());
+        if n < self.min_keypoints.max(1) {
+            return None;
+        }
+        let m = match_descriptors(ka, kb, &self.matching).len().min(n);
+        Some(1.0 - m as f64 / n as f64)
+    }
+}

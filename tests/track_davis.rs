@@ -1,0 +1,62 @@
+//! The online tracker on real frames: DAVIS-2016 car-shadow (40 JPEG frames 854×480), with the
+//! ground-truth masks given as detections, so the mask pipeline (shells, regions, SIFT and
+//! colour on real pixels) runs on a real video. The single object must keep one id for all
+//! 40 frames.
+
+use shapetrack::io::png_masks::{read_png_mask_dir, EightBit};
+use shapetrack::track::{detections_by_frame, Config, Tracker};
+use shapetrack::Frame;
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+fn davis(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/davis-car-shadow/DAVIS")
+        .join(rel)
+}
+
+#[test]
+fn car_keeps_one_id_for_all_40_frames_on_real_pixels() {
+    let seq = read_png_mask_dir(
+        &davis("Annotations/480p/car-shadow"),
+        EightBit::Binary { id: 1 },
+    )
+    .unwrap();
+    assert_eq!(seq.num_frames, 40);
+    let per_frame = detections_by_frame(&seq.records, 1, seq.num_frames);
+    let mut images: Vec<PathBuf> = std::fs::read_dir(davis("JPEGImages/480p/car-shadow"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "jpg"))
+        .collect();
+    images.sort();
+    assert_eq!(images.len(), 40);
+
+    let mut tracker = Tracker::new(Config::masks()).unwrap();
+    let mut shapes = Vec::new();
+    let mut keypoints = 0;
+    for (dets, path) in per_frame.iter().zip(&images) {
+        assert_eq!(dets.len(), 1, "one object per frame");
+        let img = image::open(path).unwrap().to_rgb8();
+        assert_eq!((img.width(), img.height()), (seq.width, seq.height));
+        let frame = Frame::rgb(img.as_raw(), img.width(), img.height()).unwrap();
+        shapes.extend(tracker.update(Some(&frame), dets).unwrap());
+        // Appearance is computed on the real pixels (for the track's reference view).
+        if let Some(a) = tracker.tracks().first().and_then(|t| t.appearance()) {
+            keypoints = keypoints.max(a.sift.as_ref().map_or(0, |s| s.len()));
+            assert!(a.colour.as_ref().is_some_and(|c| c.len() > 50));
+            assert!(a.shape.is_some());
+        }
+    }
+    let frames: BTreeSet<u32> = shapes.iter().map(|s| s.frame).collect();
+    let ids: BTreeSet<u64> = shapes.iter().map(|s| s.id).collect();
+    assert_eq!(frames.len(), 40, "every frame reported: {frames:?}");
+    assert_eq!(shapes.len(), 40);
+    assert_eq!(ids.len(), 1, "one id: {ids:?}");
+    assert!(shapes.iter().all(|s| !s.interpolated && s.mask.is_some()));
+    assert!(
+        keypoints >= 5,
+        "SIFT found {keypoints} keypoints on the car"
+    );
+    assert_eq!(tracker.tracks().len(), 1);
+}
