@@ -4,8 +4,9 @@
 //!
 //! ```text
 //! cargo run --release --example ablation            # the term ablation
-//! cargo run --release --example ablation -- --all   # plus variants (Alg. 5, eager
-//!                                                   # appearance, colour sample sizes)
+//! cargo run --release --example ablation -- --all   # plus variants (Alg. 5, the thesis'
+//!                                                   # Canny shell, eager appearance,
+//!                                                   # colour sample sizes)
 //! ```
 //!
 //! Rows:
@@ -22,7 +23,7 @@ use shapetrack::eval::{evaluate, EvalConfig, Preprocessing, SequenceInput, Simil
 use shapetrack::synth::{Scene, SynthConfig, SynthFrame};
 use shapetrack::track::{
     to_records, Appearance, Config, FeatureExtractor, Features, MaskFeatures, ShapeVariant,
-    TermConfig, Tracker,
+    ShellMode, TermConfig, Tracker,
 };
 use shapetrack::{Detection, Frame};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -175,6 +176,14 @@ fn main() {
     let mut alg5 = full.clone();
     alg5.shape_variant = ShapeVariant::Sift;
     row("masks, C1 by Alg. 5 (SIFT fit)", &run(&alg5, &scenes));
+    for side in [64u32, 128] {
+        let mut canny = full.clone();
+        canny.appearance.shell = ShellMode::Canny { max_side: side };
+        row(
+            &format!("masks, thesis Canny shell ≤ {side} px"),
+            &run(&canny, &scenes),
+        );
+    }
     let mut eager = full.clone();
     eager.appearance.lazy = false;
     row("masks, appearance for every det", &run(&eager, &scenes));
