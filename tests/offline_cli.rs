@@ -144,33 +144,70 @@ fn offline_mask_mode_with_frames_on_a_synthetic_occlusion_scene() {
         s(&seq),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let out = dir.join("out.xml");
-    let o = shapetrack(&[
-        "track",
-        "--det",
-        s(&seq.join("det/det_mots.txt")),
-        "--seqinfo",
-        s(&seq.join("seqinfo.ini")),
-        "--frames",
-        s(&seq.join("img1")),
-        "--out",
-        s(&out),
-        "--offline",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("mask mode, offline"), "{text}");
-    let cvat = parse_cvat(&read_text(&out).unwrap(), "out.xml", None).unwrap();
-    assert!(!cvat.records.is_empty());
-    // Masks were written (CVAT <mask>) and any filled ones are marked.
-    assert!(cvat.records.iter().all(|r| r.mask.is_some()));
-    // Objects hidden behind the bars were re-joined (with SIFT snapshots from the frames)
-    // and short gaps filled.
+    let (det, seqinfo, img) = (
+        seq.join("det/det_mots.txt"),
+        seq.join("seqinfo.ini"),
+        seq.join("img1"),
+    );
+    let track = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "track",
+            "--det",
+            s(&det),
+            "--seqinfo",
+            s(&seqinfo),
+            "--frames",
+            s(&img),
+            "--out",
+            s(out),
+            "--offline",
+        ];
+        args.extend_from_slice(extra);
+        let o = shapetrack(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(text.contains("mask mode, offline"), "{text}");
+        let cvat = parse_cvat(&read_text(out).unwrap(), "out.xml", None).unwrap();
+        assert!(!cvat.records.is_empty());
+        // Masks were written (CVAT <mask>).
+        assert!(cvat.records.iter().all(|r| r.mask.is_some()));
+        (o, text, cvat)
+    };
+    // The box-mode defaults as the online pass: objects hidden behind the bars come back under
+    // new ids, the re-linker joins them (with SIFT snapshots from the frames) and fills short
+    // gaps, each marked interpolated (the defaults never coast, so only fills are).
+    let (o, text, cvat) = track(&dir.join("default.xml"), &["--preset", "default"]);
     let filled = summary_value(&o, "filled");
     assert!(summary_value(&o, "joins") > 0 && filled > 0, "{text}");
     assert_eq!(
         cvat.records.iter().filter(|r| r.flags.interpolated).count(),
         filled
+    );
+    // The mask preset (the default for MOTS input) re-identifies them online already: fewer
+    // tracks than the defaults' online pass; interpolated shapes are the fills plus the online
+    // pass's coasting over missed detections.
+    let (o, text, cvat) = track(&dir.join("masks.xml"), &[]);
+    let tracks = |o: &Output| summary_value(o, "tracks");
+    let masks_tracks = tracks(&o);
+    let o_default = shapetrack(&[
+        "track",
+        "--det",
+        s(&seq.join("det/det_mots.txt")),
+        "--frames",
+        s(&seq.join("img1")),
+        "--preset",
+        "default",
+        "--out",
+        s(&dir.join("default_online.txt")),
+    ]);
+    assert!(o_default.status.success());
+    assert!(
+        masks_tracks < tracks(&o_default),
+        "{text} vs {}",
+        String::from_utf8_lossy(&o_default.stdout)
+    );
+    assert!(
+        cvat.records.iter().filter(|r| r.flags.interpolated).count() >= summary_value(&o, "filled")
     );
 }
 

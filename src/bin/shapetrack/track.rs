@@ -20,6 +20,16 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+/// Tracker settings presets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// `Config::default()`: tuned on MOTChallenge boxes.
+    Default,
+    /// `Config::masks()`: instance masks with frames (appearance, re-identification by colour
+    /// and SIFT, amodal completion, fragment merging, coasting).
+    Masks,
+}
+
 /// Output file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
@@ -66,10 +76,13 @@ pub struct Args {
     /// Output format (default: from the extension: `.json` COCO-video, `.xml` CVAT, else MOT).
     #[arg(long, value_enum)]
     pub format: Option<Format>,
-    /// Tracker configuration (JSON; missing fields take their defaults: `Config::default()`
-    /// for boxes, `Config::masks()` for MOTS masks).
+    /// Tracker configuration (JSON; missing fields take the preset's values).
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Settings preset the configuration starts from (default: `masks` for MOTS masks,
+    /// `default` for boxes).
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
 }
 
 /// Whether a detection file is MOTS: its first line has six whitespace-separated fields, no
@@ -121,10 +134,12 @@ pub fn run(args: Args) -> crate::CliResult {
     let mots = is_mots(&text);
     // Masks get the mask preset (appearance, amodal completion, re-identification by colour
     // and SIFT when frames are given); a JSON config fills its missing fields from it too.
-    let base = if mots {
-        Config::masks()
-    } else {
-        Config::default()
+    let preset = args
+        .preset
+        .unwrap_or(if mots { Preset::Masks } else { Preset::Default });
+    let base = match preset {
+        Preset::Masks => Config::masks(),
+        Preset::Default => Config::default(),
     };
     let online_config = match &args.config {
         Some(p) => {
