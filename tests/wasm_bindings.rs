@@ -621,6 +621,44 @@ fn ids(records: &[RecordJs]) -> std::collections::BTreeSet<i64> {
     records.iter().map(|r| r.id).collect()
 }
 
+/// The mask preset reaches the core through JS: on the occlusion scene (eight shapes hidden
+/// behind bars again and again) it re-identifies shapes after each hide by colour and SIFT,
+/// where the box-mode defaults start new tracks; the identity scores say so too.
+#[wasm_bindgen_test]
+fn mask_preset_from_js_reidentifies_shapes_after_occlusions() {
+    let run = |config: serde_json::Value| {
+        let mut s = scene("occlusion");
+        let (w, h, frames) = (s.width(), s.height(), s.frames());
+        let mut buf = FrameBuffer::new(w, h).unwrap();
+        let mut tracker = Tracker::new(Some(ts(js(&config))), None).unwrap();
+        let mut gt = Vec::new();
+        for n in 1..=frames {
+            let f = s.render(n, &mut buf).unwrap();
+            gt.extend(records_of(f.ground_truth().unwrap()));
+            tracker.update(n, &buf, &f.detections()).unwrap();
+        }
+        let res = records_of(tracker.tracks().unwrap());
+        let opts = serde_json::json!({ "similarity": "mask" });
+        let v = evaluate(ts(js(&gt)), ts(js(&res)), frames, Some(ts(js(&opts)))).unwrap();
+        let scores: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap();
+        let (idf1, idsw) = (
+            scores["idf1"].as_f64().unwrap(),
+            scores["idsw"].as_u64().unwrap(),
+        );
+        (ids(&res).len(), idf1, idsw)
+    };
+    let (default_ids, default_idf1, default_idsw) = run(serde_json::json!({}));
+    let (masks_ids, masks_idf1, masks_idsw) = run(serde_json::json!({ "preset": "masks" }));
+    let msg = format!(
+        "ids {default_ids} → {masks_ids}, IDF1 {default_idf1:.1} → {masks_idf1:.1}, \
+         IDSW {default_idsw} → {masks_idsw}"
+    );
+    wasm_bindgen_test::console_log!("occlusion scene, box defaults → mask preset: {msg}");
+    assert!(masks_ids * 3 <= default_ids * 2, "{msg}");
+    assert!(masks_idf1 > default_idf1 + 20.0, "{msg}");
+    assert!(masks_idsw < default_idsw, "{msg}");
+}
+
 #[wasm_bindgen_test]
 fn finish_rejoins_occluded_tracks_and_fills_the_gaps() {
     // Eight shapes bouncing behind two bars (hidden ~10 frames each time), tracked from the
