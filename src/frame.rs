@@ -658,17 +658,24 @@ impl Mask {
 
     /// Number of pixels foreground in both masks.
     pub fn intersection(&self, other: &Mask) -> u64 {
-        let x0 = self.x.max(other.x);
-        let y0 = self.y.max(other.y);
-        let x1 = (self.x + self.width as i32).min(other.x + other.width as i32);
-        let y1 = (self.y + self.height as i32).min(other.y + other.height as i32);
+        self.intersection_shifted(0, 0, other)
+    }
+
+    /// Number of pixels foreground both in this mask moved by `(dx, dy)` whole pixels and in
+    /// `other`: `self.translated(dx, dy).intersection(other)` without copying the bitmap.
+    pub fn intersection_shifted(&self, dx: i32, dy: i32, other: &Mask) -> u64 {
+        let (sx, sy) = (self.x + dx, self.y + dy);
+        let x0 = sx.max(other.x);
+        let y0 = sy.max(other.y);
+        let x1 = (sx + self.width as i32).min(other.x + other.width as i32);
+        let y1 = (sy + self.height as i32).min(other.y + other.height as i32);
         let mut n = 0u64;
         for y in y0..y1 {
-            let ra = (y - self.y) as usize * self.width as usize;
+            let ra = (y - sy) as usize * self.width as usize;
             let rb = (y - other.y) as usize * other.width as usize;
             for x in x0..x1 {
-                n += (self.data[ra + (x - self.x) as usize]
-                    & other.data[rb + (x - other.x) as usize]) as u64;
+                n += (self.data[ra + (x - sx) as usize] & other.data[rb + (x - other.x) as usize])
+                    as u64;
             }
         }
         n
@@ -676,7 +683,13 @@ impl Mask {
 
     /// Mask intersection over union in `[0, 1]` (0 when both are empty).
     pub fn iou(&self, other: &Mask) -> f64 {
-        let i = self.intersection(other);
+        self.iou_shifted(0, 0, other)
+    }
+
+    /// [`Mask::iou`] of this mask moved by `(dx, dy)` whole pixels with `other`, without
+    /// copying the bitmap (the tracker scores every pair this way).
+    pub fn iou_shifted(&self, dx: i32, dy: i32, other: &Mask) -> f64 {
+        let i = self.intersection_shifted(dx, dy, other);
         let u = self.area() + other.area() - i;
         if u == 0 {
             0.0
@@ -914,6 +927,18 @@ mod tests {
         assert!((c.x - (2.0 + 3.0 + 3.0 + 5.0) / 4.0 - 0.5).abs() < 1e-12);
         assert!((m.iou(&m) - 1.0).abs() < 1e-12);
         assert_eq!(m.iou(&m.translated(10, 0)), 0.0);
+        // Shifting in place equals copying the mask moved, for every offset around it.
+        let other = Mask::from_bbox(&BBox::new(1.0, 0.0, 5.0, 3.0));
+        for dx in -6..=6 {
+            for dy in -5..=5 {
+                let moved = m.translated(dx, dy);
+                assert_eq!(
+                    m.intersection_shifted(dx, dy, &other),
+                    moved.intersection(&other)
+                );
+                assert_eq!(m.iou_shifted(dx, dy, &other), moved.iou(&other));
+            }
+        }
     }
 
     #[test]

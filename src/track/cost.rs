@@ -219,7 +219,7 @@ impl PairCost for MaskIouCost {
             s.x.round().clamp(-1e6, 1e6) as i32,
             s.y.round().clamp(-1e6, 1e6) as i32,
         );
-        Some(1.0 - a.translated(dx, dy).iou(b))
+        Some(1.0 - a.iou_shifted(dx, dy, b))
     }
 }
 

@@ -226,21 +226,23 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
    * @param {number} id
    */
   const aloneCoverage = async (f, id) => {
-    const app = async (/** @type {string} */ expr, /** @type {any} */ arg) =>
-      page.evaluate(([e, a]) => new Function('app', 'arg', `return (${e})`)(/** @type {any} */ (window).__shapetrack.app, a), [expr, arg]);
-    await app('app.seek(arg)', f);
+    // (Page functions run in the browser: each reaches the app through `window` itself.)
+    await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), f);
     await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, f);
     const others = [...new Set(offline.filter((o) => o.frame === f && o.id !== id).map((o) => o.id))];
     for (const o of others) {
-      await app('app.select(arg, false)', o);
-      await app("app.action('deleteRecord')", null);
+      await page.evaluate((o) => {
+        const app = /** @type {any} */ (window).__shapetrack.app;
+        app.select(o, false);
+        app.action('deleteRecord');
+      }, o);
     }
-    await app('app.deselect()', null);
+    await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.deselect());
     await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
     const box = offline.find((o) => o.frame === f && o.id === id)?.bbox;
     assert.ok(box);
     const cover = await edgeCoverage(page, box);
-    for (const _ of others) await app("app.action('undo')", null);
+    for (const _ of others) await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.action('undo'));
     return cover;
   };
   await page.evaluate(() => Object.assign(/** @type {any} */ (window).__shapetrack.app.options, { masks: false, trails: false }));

@@ -122,11 +122,6 @@ fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
         })
 }
 
-/// `base` with the fields given in the JSON `text` replaced (see [`Config::overlay`]).
-fn config_over(base: &Config, text: &str) -> Result<Config, serde_json::Error> {
-    base.overlay_json(text)
-}
-
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
     let det_name = args.det.display().to_string();
@@ -142,9 +137,9 @@ pub fn run(args: Args) -> crate::CliResult {
         Preset::Default => Config::default(),
     };
     let online_config = match &args.config {
-        Some(p) => {
-            config_over(&base, &read_text(p)?).map_err(|e| format!("{}: {e}", p.display()))?
-        }
+        Some(p) => base
+            .overlay_json(&read_text(p)?)
+            .map_err(|e| format!("{}: {e}", p.display()))?,
         None => base,
     };
     let mut offline_config = OfflineConfig {
@@ -152,17 +147,13 @@ pub fn run(args: Args) -> crate::CliResult {
         ..OfflineConfig::default()
     };
     if let Some(p) = &args.offline_config {
-        let text = read_text(p)?;
-        let from_file =
-            OfflineConfig::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?;
+        let bad = |e: serde_json::Error| format!("{}: {e}", p.display());
+        let value: serde_json::Value = serde_json::from_str(&read_text(p)?).map_err(bad)?;
+        let from_file: OfflineConfig = serde_json::from_value(value.clone()).map_err(bad)?;
         // The file's `online` section, when present, merges over --config (or the preset);
         // without one, the online pass is the one --config (or the preset) describes.
-        let online_section = serde_json::from_str::<serde_json::Value>(&text)
-            .ok()
-            .and_then(|v| v.get("online").cloned());
-        let online = match online_section {
-            Some(section) => config_over(&online_config, &section.to_string())
-                .map_err(|e| format!("{}: {e}", p.display()))?,
+        let online = match value.get("online") {
+            Some(section) => online_config.overlay(section).map_err(bad)?,
             None => online_config.clone(),
         };
         offline_config = OfflineConfig {
@@ -384,16 +375,14 @@ mod tests {
     #[test]
     fn json_config_overrides_only_its_fields() {
         let base = Config::masks();
-        let c = config_over(
-            &base,
-            r#"{"max_lost": 7, "terms": {"iou": {"weight": 2.0}}}"#,
-        )
-        .unwrap();
+        let c = base
+            .overlay_json(r#"{"max_lost": 7, "terms": {"iou": {"weight": 2.0}}}"#)
+            .unwrap();
         assert_eq!(c.max_lost, 7);
         assert_eq!(c.terms.iou.weight, 2.0);
         assert_eq!(c.terms.ioa, base.terms.ioa);
         assert_eq!(c.coast_frames, base.coast_frames);
-        assert!(config_over(&base, r#"{"max_lots": 7}"#).is_err());
-        assert!(config_over(&base, "not json").is_err());
+        assert!(base.overlay_json(r#"{"max_lots": 7}"#).is_err());
+        assert!(base.overlay_json("not json").is_err());
     }
 }
