@@ -19,7 +19,8 @@ use crate::features::sift::{match_descriptors, MatchConfig};
 use crate::frame::Point;
 use serde::{Deserialize, Serialize};
 
-use super::cost::{Candidate, PairCost};
+use super::config::{Config, ShapeVariant, Terms};
+use super::cost::{Candidate, CostModel, PairCost};
 use super::features::Appearance;
 use super::lifecycle::Track;
 
@@ -44,17 +45,6 @@ impl TrackSide {
 
 fn det_appearance<'d>(d: &Candidate<'d>) -> Option<&'d Appearance> {
     d.features?.appearance.as_deref()
-}
-
-/// How C1 fits the transform between two shapes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum ShapeVariant {
-    /// Alg. 4: χ² matching of the contour vertices' log-polar histograms (default).
-    #[default]
-    Contour,
-    /// Alg. 5: the transform is fitted to SIFT keypoint matches; C1 is still measured on the
-    /// contour vertices. Falls back to the centroid alignment without enough matches.
-    Sift,
 }
 
 /// Thesis C1 (shape context): the symmetric sum of nearest contour-vertex distances after
@@ -203,4 +193,57 @@ impl PairCost for SiftCost {
         let m = match_descriptors(ka, kb, &self.matching).len().min(n);
         Some(1.0 - m as f64 / n as f64)
     }
+}
+/// The cost model of one association: the geometric and motion terms of `terms` and the
+/// appearance terms registered here (those with a positive weight), reading the track's
+/// `side` appearance, colour compared as `colour`.
+pub(crate) fn cost_model(
+    terms: &Terms,
+    config: &Config,
+    side: TrackSide,
+    colour: ColourMode,
+) -> CostModel {
+    // The IoA buffer grows like the search region: twice the per-side margin growth.
+    let ioa_growth = 2.0 * config.region_margin_per_miss;
+    let mut model = CostModel::from_terms_with(terms, ioa_growth);
+    register_appearance(&mut model, terms, config, side, colour);
+    model
+}
+
+/// Registers the appearance terms of `terms` (those with a positive weight) on `model`.
+fn register_appearance(
+    model: &mut CostModel,
+    terms: &Terms,
+    config: &Config,
+    side: TrackSide,
+    colour: ColourMode,
+) {
+    model.push(
+        Box::new(ShapeContextCost {
+            config: config.appearance.shape_context,
+            variant: config.shape_variant,
+            matching: config.sift_matching.clone(),
+            side,
+        }),
+        terms.shape_context.weight,
+        terms.shape_context.gate,
+    );
+    model.push(
+        Box::new(ColourCost {
+            config: config.appearance.colour,
+            mode: colour,
+            side,
+        }),
+        terms.colour.weight,
+        terms.colour.gate,
+    );
+    model.push(
+        Box::new(SiftCost {
+            matching: config.sift_matching.clone(),
+            min_keypoints: config.sift_min_keypoints,
+            side,
+        }),
+        terms.sift.weight,
+        terms.sift.gate,
+    );
 }

@@ -4,12 +4,22 @@
 //! the repository's tracking notes); they are not tuned per sequence. Every field has a default,
 //! so a JSON config only needs the fields it changes: `{"max_lost": 60}` is a valid config.
 
-use super::appearance::ShapeVariant;
 use super::features::{AppearanceConfig, Needs};
 use super::TrackError;
 use crate::features::sift::MatchConfig;
 use crate::motion::BoxKalmanParams;
 use serde::{Deserialize, Serialize};
+
+/// How C1 fits the transform between two shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ShapeVariant {
+    /// Alg. 4: χ² matching of the contour vertices' log-polar histograms (default).
+    #[default]
+    Contour,
+    /// Alg. 5: the transform is fitted to SIFT keypoint matches; C1 is still measured on the
+    /// contour vertices. Falls back to the centroid alignment without enough matches.
+    Sift,
+}
 
 /// Weight and gate of one pair-cost term.
 ///

@@ -12,10 +12,10 @@
 //! "within the cluster") say so with [`PairCost::normalise_in_cluster`]; their costs are then
 //! divided by the largest cost in the pair's region cluster before combining.
 
+use super::config::Terms;
+use super::features::Features;
 use super::lifecycle::Track;
-use super::online::Features;
 use super::regions::Regions;
-use super::Terms;
 use crate::frame::{BBox, Detection};
 
 /// A detection as the pair-cost terms see it.

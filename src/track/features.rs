@@ -34,7 +34,71 @@ use crate::features::sift::{detect_in_region, SiftConfig, SiftFeatures};
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
 use crate::geometry::{mask_geometry, ConvexShell, GeometryConfig, MaskCrop, Moments};
 
-use super::online::{FeatureExtractor, Features};
+/// Per-detection features, computed once per frame by a [`FeatureExtractor`] and kept on the
+/// track as its last appearance when the detection is matched.
+///
+/// The cheap part (centroid, area, shell) is computed for every detection in the prepare
+/// phase; the appearance only when the tracker needs it (module docs), and then shared with
+/// the track. The pair-cost terms that read a part return "no data" while it is absent.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[non_exhaustive]
+pub struct Features {
+    /// Centroid: mask moments (thesis eq. 10) when there is a mask, else the box centre.
+    pub centroid: Point,
+    /// Area: foreground pixels of the mask, else the box area (0 when the extractor did not
+    /// say).
+    pub area: f64,
+    /// The mask's convex shell, for the region estimator (`None` for box detections).
+    pub shell: Option<Arc<ConvexShell>>,
+    /// Appearance, when it was computed this frame.
+    pub appearance: Option<Arc<Appearance>>,
+}
+
+impl Features {
+    /// Features holding a centroid only.
+    pub fn with_centroid(centroid: Point) -> Self {
+        Self {
+            centroid,
+            ..Self::default()
+        }
+    }
+}
+
+/// Computes a detection's [`Features`]: the cheap part once per detection per frame, the
+/// appearance on demand.
+pub trait FeatureExtractor: Send {
+    /// The cheap features of `det` in `frame` (`None` in box mode, where there are no pixels).
+    fn extract(&self, frame: Option<&Frame<'_>>, det: &Detection) -> Result<Features, String>;
+
+    /// The appearance of `det` in `frame` (tracker frame number `frame_number`), `None` when
+    /// the extractor computes none (the default). Called only for detections the tracker
+    /// needs appearance for. A failure is treated as "no appearance": the terms that would
+    /// read it drop out for this detection.
+    fn describe(
+        &self,
+        frame: &Frame<'_>,
+        det: &Detection,
+        frame_number: u32,
+    ) -> Result<Option<Appearance>, String> {
+        let _ = (frame, det, frame_number);
+        Ok(None)
+    }
+}
+
+/// The default extractor: the centroid only. Needs no image.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BoxFeatures;
+
+impl FeatureExtractor for BoxFeatures {
+    fn extract(&self, _frame: Option<&Frame<'_>>, det: &Detection) -> Result<Features, String> {
+        let mut f = Features::with_centroid(det.centroid());
+        f.area = match &det.mask {
+            Some(m) => m.area() as f64,
+            None => det.bbox.area(),
+        };
+        Ok(f)
+    }
+}
 
 /// How a mask's convex shell is computed (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -182,7 +246,7 @@ pub struct Appearance {
 }
 
 /// The feature extractor for mask detections (module docs). Box-only detections get the box
-/// centre and area and no shell or appearance, exactly like [`super::BoxFeatures`].
+/// centre and area and no shell or appearance, exactly like [`BoxFeatures`].
 #[derive(Debug, Clone, Default)]
 pub struct MaskFeatures {
     /// Settings.

@@ -1,14 +1,23 @@
-//! One track: its identity, lifecycle counters, motion filter and last appearance.
+//! One track and its lifecycle: born tentative from an unmatched detection, confirmed after
+//! enough matches, lost while unmatched, removed after too long; every transition is a method
+//! here ([`Track::hit`], [`Track::confirm`], [`Track::miss`], [`Track::absorb`] …), so the
+//! tracker's phases only decide *which* transition happens, never how.
 
 use std::sync::Arc;
 
-use super::features::Appearance;
-use super::online::Features;
+use super::amodal::{amodal_box, Cut, REAPPEAR_GAP};
+use super::config::Config;
+use super::features::{Appearance, Features};
 use crate::frame::{BBox, Detection, Point, TrackState, TrackedShape};
-use crate::motion::{BoxMotionModel, MotionModel};
+use crate::geometry::ConvexShell;
+use crate::motion::{BoxMotionModel, MotionError, MotionModel};
 
 /// The boxed motion filter a track owns (any [`MotionModel`] on boxes).
 pub(crate) type BoxMotion = Box<dyn BoxMotionModel>;
+
+/// A track moving more than this fraction of its size per frame is fast: its search shell is
+/// swept along the predicted displacement, so a detection found part-way still meets it.
+const FAST_MOTION: f64 = 0.5;
 
 /// The areas and box sizes of a track's last [`Sizes::LEN`] matched detections, whose upper
 /// quartiles are the reference size of the whole shape.
@@ -51,48 +60,51 @@ impl Sizes {
     }
 }
 
-/// One track. Pair-cost terms read it through the accessors; the tracker alone mutates it.
+/// One track. Its fields are private: pair-cost terms and the tracker's phases read it through
+/// the accessors and change it only through the lifecycle methods.
 pub struct Track {
-    pub(crate) id: Option<u64>,
-    pub(crate) state: TrackState,
-    pub(crate) motion: BoxMotion,
+    id: Option<u64>,
+    state: TrackState,
+    motion: BoxMotion,
     /// The filter right after the last match, kept for the re-update after a gap.
-    pub(crate) snapshot: Option<BoxMotion>,
+    snapshot: Option<BoxMotion>,
     /// Kalman prediction for the current frame (set by the predict phase).
-    pub(crate) predicted: BBox,
+    predicted: BBox,
     /// The filter's box right after the last match: where the predicted shift starts from.
     /// With amodal completion it is the whole shape's box even when only part was seen.
-    pub(crate) anchor: BBox,
+    anchor: BBox,
     /// Reference area of the whole shape (pixels; box area in box mode): see [`Sizes`].
-    pub(crate) ref_area: f64,
+    ref_area: f64,
     /// Reference box size `(w, h)` of the whole shape: see [`Sizes`].
-    pub(crate) ref_size: (f64, f64),
+    ref_size: (f64, f64),
     /// Areas and box sizes of the last matched detections.
-    pub(crate) sizes: Sizes,
+    sizes: Sizes,
     /// The occluded side on each axis during the current partial view (amodal completion).
-    pub(crate) cuts: [Option<super::online::Cut>; 2],
+    cuts: [Option<Cut>; 2],
     /// Area of the last matched detection over `ref_area` (before updating it): below the
     /// whole ratio the last view was partial (occluded or leaving the frame).
-    pub(crate) last_ratio: f64,
+    last_ratio: f64,
     /// Whether the last matched detection showed the whole shape: its area near the reference
     /// and no side needing amodal completion.
-    pub(crate) last_whole: bool,
+    last_whole: bool,
     /// The latest appearance computed for the track.
-    pub(crate) appearance: Option<Arc<Appearance>>,
+    appearance: Option<Arc<Appearance>>,
     /// The latest appearance computed while the shape was seen whole.
-    pub(crate) reference: Option<Arc<Appearance>>,
+    reference: Option<Arc<Appearance>>,
     /// Frames matched, in total.
-    pub(crate) hits: u32,
+    hits: u32,
     /// Consecutive frames without a match (0 when matched this or the previous frame).
-    pub(crate) misses: u32,
+    misses: u32,
     /// Frame of the last match (tracker frame numbers, 1-based).
-    pub(crate) last_frame: u32,
-    pub(crate) last: Detection,
-    pub(crate) features: Option<Features>,
+    last_frame: u32,
+    /// The last matched detection.
+    last: Detection,
+    /// Its features (centroid, area, shell, appearance when described).
+    features: Option<Features>,
     /// Last frame a shape was reported under the track's id (matched or coasted).
-    pub(crate) reported_until: u32,
+    reported_until: u32,
     /// Shapes matched while tentative, reported if the track is confirmed.
-    pub(crate) pending: Vec<TrackedShape>,
+    pending: Vec<TrackedShape>,
 }
 
 impl std::fmt::Debug for Track {
@@ -192,4 +204,321 @@ impl Track {
     pub fn reference_appearance(&self) -> Option<&Appearance> {
         self.reference.as_deref()
     }
+}
+
+/// The lifecycle: every change of a track's state or counters.
+impl Track {
+    /// A tentative track born from detection `det` (with its `features`) in tracker frame
+    /// `frame`. `appearance` is its first appearance, if described; `snapshot` keeps a copy of
+    /// the filter for [`Config::reupdate_after_gap`].
+    pub(crate) fn born(
+        det: &Detection,
+        features: &Features,
+        motion: BoxMotion,
+        appearance: Option<Arc<Appearance>>,
+        frame: u32,
+        snapshot: bool,
+    ) -> Track {
+        let b = det.bbox;
+        let mut sizes = Sizes::default();
+        sizes.push(features.area, b.w, b.h);
+        Track {
+            id: None,
+            state: TrackState::Tentative,
+            predicted: b,
+            anchor: b,
+            ref_area: features.area,
+            ref_size: (b.w, b.h),
+            sizes,
+            cuts: [None; 2],
+            last_ratio: 1.0,
+            last_whole: true,
+            reported_until: 0,
+            reference: appearance.clone(),
+            appearance,
+            snapshot: snapshot.then(|| motion.clone_box()),
+            motion,
+            hits: 1,
+            misses: 0,
+            last_frame: frame,
+            last: det.clone(),
+            features: Some(features.clone()),
+            pending: Vec::new(),
+        }
+    }
+
+    /// Steps the motion filter one frame; a lost track's velocity is first multiplied by
+    /// `lost_velocity_decay` (see [`Config::lost_velocity_decay`]).
+    pub(crate) fn predict(&mut self, lost_velocity_decay: f64) {
+        if self.state == TrackState::Lost && lost_velocity_decay < 1.0 {
+            self.motion.damp_velocity(lost_velocity_decay);
+        }
+        self.motion.predict();
+        self.predicted = self.motion.project();
+    }
+
+    /// A match in tracker frame `frame` with detection `det` (and its `features`): the motion
+    /// filter is corrected (with the amodal box of a partial mask view, not at all with a
+    /// sliver, see [`Config::amodal`]), the reference size and appearance follow the view, and
+    /// the counters restart. The state is left to [`Track::confirm`] / [`Track::found`].
+    pub(crate) fn hit(
+        &mut self,
+        det: &Detection,
+        features: &Features,
+        frame: u32,
+        cfg: &Config,
+    ) -> Result<(), MotionError> {
+        let area = features.area;
+        let ratio = if self.ref_area > 0.0 && area > 0.0 {
+            area / self.ref_area
+        } else {
+            1.0
+        };
+        let whole = ratio >= cfg.appearance.whole_ratio;
+        let amodal = cfg.amodal && det.mask.is_some();
+        let z = if amodal {
+            // The last detection tells which side stands still if it is recent; after a longer
+            // gap the shape is reappearing and the occlusion that cut the last views is over.
+            let last = (self.misses < REAPPEAR_GAP).then_some((&self.last.bbox, self.misses + 1));
+            if last.is_none() {
+                self.cuts = [None; 2];
+            }
+            let v = self.motion.velocity();
+            let (p, r) = (self.predicted, self.ref_size);
+            amodal_box(&p, &det.bbox, last, v, r, whole, &mut self.cuts)
+        } else {
+            det.bbox
+        };
+        if cfg.reupdate_after_gap && self.misses > 0 {
+            if let Some(snap) = &self.snapshot {
+                // With amodal completion the whole shape's boxes, else the boxes as seen.
+                let (from, to) = if amodal {
+                    (&self.anchor, &z)
+                } else {
+                    (&self.last.bbox, &det.bbox)
+                };
+                self.motion = reupdate(snap.as_ref(), from, to, self.misses)?;
+            }
+        }
+        // A sliver (a shape mostly hidden) says little about where the whole shape is:
+        // matching it keeps the track alive, but the filter coasts on its prediction rather
+        // than having its velocity dragged by the occluder's edge. Not after a gap, when the
+        // prediction has drifted and the sliver is the only news.
+        let sliver =
+            amodal && ratio < cfg.sliver_ratio && self.misses == 0 && self.hits >= cfg.min_hits;
+        if !sliver {
+            self.motion.update(&z)?;
+        }
+        self.anchor = self.motion.project();
+        if cfg.reupdate_after_gap {
+            self.snapshot = Some(self.motion.clone_box());
+        }
+        self.last_ratio = ratio;
+        self.last_whole = whole;
+        if area > 0.0 {
+            let b = det.bbox;
+            self.sizes.push(area, b.w, b.h);
+            (self.ref_area, self.ref_size) = self.sizes.reference();
+        }
+        if let Some(a) = &features.appearance {
+            self.set_appearance(a.clone(), whole);
+        }
+        self.hits += 1;
+        self.misses = 0;
+        self.last_frame = frame;
+        self.last = det.clone();
+        self.features = Some(features.clone());
+        Ok(())
+    }
+
+    /// The track's latest appearance is `a`, and its reference appearance too when the shape
+    /// was seen `whole`.
+    pub(crate) fn set_appearance(&mut self, a: Arc<Appearance>, whole: bool) {
+        if whole {
+            self.reference = Some(a.clone());
+        }
+        self.appearance = Some(a);
+    }
+
+    /// A tentative track gets its id and is confirmed.
+    pub(crate) fn confirm(&mut self, id: u64) {
+        self.id = Some(id);
+        self.state = TrackState::Confirmed;
+    }
+
+    /// A confirmed or lost track matched again: confirmed (a lost track is re-identified under
+    /// its old id).
+    pub(crate) fn found(&mut self) {
+        self.state = TrackState::Confirmed;
+    }
+
+    /// Records that a shape was reported under the track's id in tracker frame `frame`.
+    pub(crate) fn reported(&mut self, frame: u32) {
+        self.reported_until = frame;
+    }
+
+    /// Keeps `shape` (a tentative frame) to report if the track is confirmed.
+    pub(crate) fn hold(&mut self, shape: TrackedShape) {
+        self.pending.push(shape);
+    }
+
+    /// The held tentative shapes, under the track's id and confirmed (none without an id).
+    pub(crate) fn release(&mut self) -> Vec<TrackedShape> {
+        let Some(id) = self.id else {
+            return Vec::new();
+        };
+        let mut out = std::mem::take(&mut self.pending);
+        for s in &mut out {
+            s.id = id;
+            s.state = TrackState::Confirmed;
+        }
+        out
+    }
+
+    /// Forgets the held tentative shapes (when they are not reported).
+    pub(crate) fn drop_held(&mut self) {
+        self.pending = Vec::new();
+    }
+
+    /// A frame without a match: a tentative track is removed after `max_tentative_misses`
+    /// misses; a confirmed one is lost, and removed after `max_lost`.
+    pub(crate) fn miss(&mut self, max_tentative_misses: u32, max_lost: u32) {
+        self.misses += 1;
+        match self.state {
+            TrackState::Tentative if self.misses > max_tentative_misses => {
+                self.state = TrackState::Removed;
+            }
+            TrackState::Confirmed | TrackState::Lost => {
+                self.state = if self.misses > max_lost {
+                    TrackState::Removed
+                } else {
+                    TrackState::Lost
+                };
+            }
+            _ => {}
+        }
+    }
+
+    /// This lost track takes over `newer`, a tentative track found to be its reappearance (see
+    /// [`Config::reid_at_confirmation`]): its hits (the confirming one is counted by this
+    /// track's own [`Track::hit`]) and its held shapes, except those of frames this track was
+    /// already reported in (coasting). `newer` is removed.
+    pub(crate) fn absorb(&mut self, newer: &mut Track) {
+        self.hits += newer.hits.saturating_sub(1);
+        let until = self.reported_until;
+        let pending = std::mem::take(&mut newer.pending);
+        self.pending = pending.into_iter().filter(|s| s.frame > until).collect();
+        newer.state = TrackState::Removed;
+    }
+
+    /// The shape to report for a confirmed track missed for at most `max_frames` frames right
+    /// after a whole view (see [`Config::coast_frames`]): its last mask (or box) moved by the
+    /// predicted motion and clipped to the frame `size`, marked interpolated. `None` when the
+    /// track does not coast in tracker frame `frame`.
+    pub(crate) fn coast(
+        &mut self,
+        frame: u32,
+        size: Option<(u32, u32)>,
+        max_frames: u32,
+    ) -> Option<TrackedShape> {
+        let id = self.id?;
+        if self.state != TrackState::Lost || self.misses > max_frames || !self.last_whole {
+            return None;
+        }
+        let s = self.predicted_shift();
+        if !(s.x.is_finite() && s.y.is_finite()) {
+            return None;
+        }
+        let (mask, bbox) = match &self.last.mask {
+            Some(m) => {
+                let (dx, dy) = (
+                    s.x.round().clamp(-1e6, 1e6) as i32,
+                    s.y.round().clamp(-1e6, 1e6) as i32,
+                );
+                let mut moved = m.translated(dx, dy);
+                if let Some((w, h)) = size {
+                    moved = moved.clipped(w, h);
+                }
+                if moved.is_empty() {
+                    return None;
+                }
+                let b = moved.bbox();
+                (Some(moved), b)
+            }
+            None => (None, self.predicted),
+        };
+        let centroid = self
+            .features
+            .as_ref()
+            .map_or(self.predicted.center(), |f| f.centroid);
+        self.reported_until = frame;
+        Some(TrackedShape {
+            id,
+            frame,
+            bbox,
+            mask,
+            centroid: centroid + s,
+            state: TrackState::Lost,
+            score: self.last.score,
+            class: self.last.class,
+            cost: 0.0,
+            det_index: None,
+            interpolated: true,
+        })
+    }
+
+    /// The track's search shell in mask mode: its last shell moved by the predicted
+    /// displacement (swept along it when the track is lost or fast, so a detection found
+    /// part-way still meets it), merged with the predicted box (which, with amodal completion,
+    /// covers the whole shape even when the last view was partial), grown by `factor` times the
+    /// predicted box's geometric mean size.
+    pub(crate) fn search_shell(&self, factor: f64) -> ConvexShell {
+        let p = self.predicted;
+        let shift = self.predicted_shift();
+        let base = match self.features.as_ref().and_then(|f| f.shell.as_deref()) {
+            Some(s) => s.clone(),
+            None => ConvexShell::from_bbox(&self.anchor).unwrap_or_default(),
+        };
+        let size = (p.w.max(1.0) * p.h.max(1.0)).sqrt();
+        let fast = shift.x.hypot(shift.y) > FAST_MOTION * size;
+        let moved = if fast || self.misses > 0 {
+            base.swept(shift.x, shift.y)
+        } else {
+            base.translated(shift.x, shift.y)
+        };
+        let mut pts = moved.vertices().to_vec();
+        if p.is_valid() {
+            pts.extend(p.corners());
+        }
+        let merged = ConvexShell::from_points(&pts).unwrap_or(moved);
+        merged.grown(factor * size)
+    }
+}
+
+/// OC-SORT's observation-centric re-update: a track matched again after `misses` unmatched
+/// frames has a filter that drifted on predictions alone (its velocity and covariance are off).
+/// Restart from the snapshot taken at the last match and feed it virtual observations on the
+/// straight line from the last box to the new one, one per missed frame; the caller then
+/// applies the real update. The filter leaves the gap with the velocity the gap implies.
+fn reupdate(
+    snapshot: &dyn BoxMotionModel,
+    last: &BBox,
+    new: &BBox,
+    misses: u32,
+) -> Result<BoxMotion, MotionError> {
+    let mut m = snapshot.clone_box();
+    let n = misses as f64 + 1.0;
+    for i in 1..=misses {
+        let a = i as f64 / n;
+        let lerp = |p: f64, q: f64| p + (q - p) * a;
+        m.predict();
+        m.update(&BBox::new(
+            lerp(last.x, new.x),
+            lerp(last.y, new.y),
+            lerp(last.w, new.w),
+            lerp(last.h, new.h),
+        ))?;
+    }
+    m.predict();
+    Ok(m)
 }

@@ -1,15 +1,26 @@
 //! The online tracker (thesis ch. 2.1, 3.3, 4.5): a phased update over a per-track Kalman
 //! filter, region estimation, pair-cost terms and optimal assignment; and the track lifecycle.
 //!
+//! Modules, in the order they depend on one another (no module imports a later one; a test,
+//! `tests/track_modules.rs`, keeps it so):
+//!
+//! - [`features`]: [`Features`] and the [`FeatureExtractor`]s: per detection, the cheap part
+//!   (centroid, area, convex shell) once per frame, the appearance (shape context, SIFT,
+//!   colour) on demand.
 //! - [`config`]: [`Config`], one documented set of parameters for every sequence
 //!   ([`Config::masks`] for instance masks with frames).
-//! - [`features`]: [`MaskFeatures`], the per-detection features (shell; appearance on demand:
-//!   shape context, SIFT, colour).
+//! - `amodal`: the whole shape's box behind a partial view.
+//! - `lifecycle`: [`Track`], which owns its lifecycle as methods (born, hit, confirm, miss,
+//!   absorb, coast).
+//! - [`regions`]: [`estimate_regions`], which pairs are worth scoring at all (thesis Alg. 2).
 //! - [`cost`]: the [`PairCost`] trait, the built-in geometric/motion terms and their weighted,
 //!   renormalised combination (thesis eq. 39 generalised).
 //! - [`appearance`]: the appearance terms, C1 (shape context), C2 (colour) and SIFT.
-//! - [`regions`]: [`estimate_regions`], which pairs are worth scoring at all (thesis Alg. 2).
-//! - [`online`]: [`Tracker`] and its `update` phases.
+//! - `prepare`: a frame's detections checked, clipped, split into high and low confidence.
+//! - [`associate`]: association as a list of [`Stage`]s built from the config.
+//! - `describe`: when appearance is worth computing; `fragments`: detector-split masks
+//!   merged; `timing`: [`PhaseTimes`].
+//! - [`online`]: [`Tracker`], whose `update` runs the phases in turn.
 //! - [`sequence`]: whole-sequence helpers (records in, records out).
 //! - [`offline`]: the offline mode: Kalman trajectory re-linker and gap filling (thesis ch. 5).
 //!
@@ -19,27 +30,38 @@
 //! the same id) → **removed**. Ids are handed out by each [`Tracker`] when a track is
 //! confirmed, so they are dense, start at 1, and two trackers never share a counter.
 
+mod amodal;
 pub mod appearance;
+pub mod associate;
 pub mod config;
 pub mod cost;
+mod describe;
 pub mod features;
+mod fragments;
 mod lifecycle;
 pub mod offline;
 pub mod online;
+mod prepare;
 pub mod regions;
 pub mod sequence;
+mod timing;
 
-pub use appearance::{ColourCost, ColourMode, ShapeContextCost, ShapeVariant, SiftCost, TrackSide};
-pub use config::{Config, TermConfig, Terms};
+pub use appearance::{ColourCost, ColourMode, ShapeContextCost, SiftCost, TrackSide};
+pub use associate::{Stage, StageCosts, StageDetections, StageTracks};
+pub use config::{Config, ShapeVariant, TermConfig, Terms};
 pub use cost::{
     Candidate, CentreDistanceCost, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,
     MahalanobisCost, MaskIouCost, PairCost, SizeCost, WeightedTerm,
 };
-pub use features::{Appearance, AppearanceConfig, MaskFeatures, Needs, ShellMode};
+pub use features::{
+    Appearance, AppearanceConfig, BoxFeatures, FeatureExtractor, Features, MaskFeatures, Needs,
+    ShellMode,
+};
 pub use lifecycle::Track;
-pub use online::{BoxFeatures, FeatureExtractor, Features, PhaseTimes, Tracker};
+pub use online::Tracker;
 pub use regions::{estimate_regions, Cluster, Regions};
 pub use sequence::{detections_by_frame, to_records, track_sequence};
+pub use timing::PhaseTimes;
 
 use crate::assign::AssignError;
 use crate::motion::MotionError;

@@ -1,0 +1,280 @@
+//! Association as a list of stages (ByteTrack's cascade, generalised): each [`Stage`] offers
+//! the tracks and detections no earlier stage took, filtered by track state and detection
+//! confidence, keeps the pairs whose cost passes the stage's threshold, and solves them
+//! optimally. [`stages`] builds the list from a [`Config`]; the tracker runs it in turn.
+
+use super::config::Config;
+use super::cost::{Candidate, CostModel, PairScore};
+use super::lifecycle::Track;
+use super::prepare::Prepared;
+use super::regions::Regions;
+use crate::assign::{self, AssignError, Unmatched};
+use crate::frame::TrackState;
+
+/// An allowed pair: track index, prepared-detection index, the cost the assignment
+/// minimises, and the cost thresholds compare (see [`super::cost::PairScore`]).
+pub(crate) type Edge = (usize, usize, f64, f64);
+
+/// A match decided by a stage: track index, prepared-detection index, cost.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pair {
+    pub(crate) track: usize,
+    pub(crate) det: usize,
+    pub(crate) cost: f64,
+}
+
+/// Which tracks and detections the stages have taken so far.
+pub(crate) struct Used {
+    pub(crate) tracks: Vec<bool>,
+    pub(crate) dets: Vec<bool>,
+}
+
+impl Used {
+    /// Nothing taken yet.
+    pub(crate) fn new(tracks: usize, dets: usize) -> Self {
+        Self {
+            tracks: vec![false; tracks],
+            dets: vec![false; dets],
+        }
+    }
+}
+
+/// The tracks a stage offers, by lifecycle state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StageTracks {
+    /// Confirmed tracks (matched in the previous frame).
+    Confirmed,
+    /// Lost tracks (unmatched for a frame or more, still searchable).
+    Lost,
+    /// Confirmed and lost tracks together, in one assignment.
+    Active,
+    /// Tentative tracks (not yet confirmed).
+    Tentative,
+}
+
+impl StageTracks {
+    fn accepts(self, state: TrackState) -> bool {
+        match self {
+            StageTracks::Confirmed => state == TrackState::Confirmed,
+            StageTracks::Lost => state == TrackState::Lost,
+            StageTracks::Active => matches!(state, TrackState::Confirmed | TrackState::Lost),
+            StageTracks::Tentative => state == TrackState::Tentative,
+        }
+    }
+}
+
+/// The detections a stage offers, by confidence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StageDetections {
+    /// High-confidence detections (see [`Config::high_score`]).
+    High,
+    /// Low-confidence detections: they only extend tracks, never start them.
+    Low,
+}
+
+/// Which pair costs a stage reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StageCosts {
+    /// The main association's terms ([`Config::terms`]), scored once per frame.
+    Main,
+    /// The re-identification terms ([`Config::reid_terms`]), scored when the stage runs, on
+    /// the pairs still free then (their detections described first when appearance is needed).
+    Reid,
+}
+
+/// One association stage.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stage {
+    /// A name for diagnostics.
+    pub name: &'static str,
+    /// Tracks offered.
+    pub tracks: StageTracks,
+    /// Detections offered.
+    pub detections: StageDetections,
+    /// Costs read.
+    pub costs: StageCosts,
+    /// Highest cost (the threshold-compared one) a match may have.
+    pub max_cost: f64,
+}
+
+/// The stages `config` describes, in the order they run:
+///
+/// 1. tracks seen in the previous frame × high detections (with lost tracks in the same
+///    assignment, after it with [`Config::lost_second`], or not at all with
+///    [`Config::lost_reid_only`]), up to [`Config::max_cost`];
+/// 2. tracks seen in the previous frame × low detections, up to [`Config::max_cost_low`]
+///    (ByteTrack's second association);
+/// 3. tentative tracks × high detections, up to [`Config::max_cost_tentative`], and the
+///    re-identification of lost tracks × high detections, up to [`Config::reid_max_cost`]
+///    (re-identification first with `lost_reid_only`, so a reappearing shape goes back to its
+///    lost track before a tentative one takes it).
+pub fn stages(config: &Config) -> Vec<Stage> {
+    let main = |name, tracks, detections, max_cost| Stage {
+        name,
+        tracks,
+        detections,
+        costs: StageCosts::Main,
+        max_cost,
+    };
+    use StageDetections::{High, Low};
+    let mut out = Vec::new();
+    if config.lost_reid_only {
+        out.push(main(
+            "confirmed",
+            StageTracks::Confirmed,
+            High,
+            config.max_cost,
+        ));
+    } else if config.lost_second {
+        out.push(main(
+            "confirmed",
+            StageTracks::Confirmed,
+            High,
+            config.max_cost,
+        ));
+        out.push(main("lost", StageTracks::Lost, High, config.max_cost));
+    } else {
+        out.push(main("active", StageTracks::Active, High, config.max_cost));
+    }
+    out.push(main(
+        "low",
+        StageTracks::Confirmed,
+        Low,
+        config.max_cost_low,
+    ));
+    let tentative = main(
+        "tentative",
+        StageTracks::Tentative,
+        High,
+        config.max_cost_tentative,
+    );
+    let reid = Stage {
+        name: "reid",
+        tracks: StageTracks::Lost,
+        detections: High,
+        costs: StageCosts::Reid,
+        max_cost: config.reid_max_cost,
+    };
+    if config.lost_reid_only {
+        out.extend([reid, tentative]);
+    } else {
+        out.extend([tentative, reid]);
+    }
+    out
+}
+
+impl Stage {
+    /// Whether track `t` and detection `d`, both still free, are offered by this stage.
+    pub(crate) fn offers(&self, t: &Track, d: &Prepared<'_>) -> bool {
+        self.tracks.accepts(t.state())
+            && match self.detections {
+                StageDetections::High => d.high,
+                StageDetections::Low => !d.high,
+            }
+    }
+
+    /// Runs the stage over `edges`: the free pairs it offers costing at most its
+    /// `max_cost`, solved optimally under `policy`; the matches are marked used and appended
+    /// to `out`.
+    pub(crate) fn run(
+        &self,
+        tracks: &[Track],
+        dets: &[Prepared<'_>],
+        edges: &[Edge],
+        policy: Unmatched,
+        used: &mut Used,
+        out: &mut Vec<Pair>,
+    ) -> Result<(), AssignError> {
+        let costs: Vec<(usize, usize, f64)> = edges
+            .iter()
+            .filter(|&&(t, d, _, gate)| {
+                gate <= self.max_cost
+                    && !used.tracks[t]
+                    && !used.dets[d]
+                    && self.offers(&tracks[t], &dets[d])
+            })
+            .map(|&(t, d, c, _)| (t, d, c))
+            .collect();
+        if costs.is_empty() {
+            return Ok(());
+        }
+        for m in assign::solve_sparse(tracks.len(), dets.len(), &costs, policy)?.matches {
+            let (t, d) = (m.row, m.col);
+            used.tracks[t] = true;
+            used.dets[d] = true;
+            out.push(Pair {
+                track: t,
+                det: d,
+                cost: m.cost,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The combined cost under `model` of the candidate pairs of `regions` (between `tracks`
+/// and `dets`) that `keep` accepts (sparse: a track only has the few candidates its region estimate found).
+pub(crate) fn score_edges(
+    model: &CostModel,
+    tracks: &[Track],
+    regions: &Regions,
+    dets: &[Prepared<'_>],
+    keep: impl Fn(&(usize, usize)) -> bool,
+) -> Vec<Edge> {
+    let cands: Vec<Candidate<'_>> = dets.iter().map(Prepared::candidate).collect();
+    // Tracks of different known classes never match (MOTS: cars are not pedestrians).
+    let same_class = |t: usize, d: usize| {
+        let (tc, dc) = (tracks[t].last_detection().class, dets[d].det.class);
+        tc < 0 || dc < 0 || tc == dc
+    };
+    let kept: Vec<usize> = (0..regions.pairs.len())
+        .filter(|&k| keep(&regions.pairs[k]))
+        .collect();
+    let sub;
+    let regions = if kept.len() == regions.pairs.len() {
+        regions
+    } else {
+        sub = Regions {
+            pairs: kept.iter().map(|&k| regions.pairs[k]).collect(),
+            pair_cluster: kept.iter().map(|&k| regions.pair_cluster[k]).collect(),
+            clusters: regions.clusters.clone(),
+        };
+        &sub
+    };
+    let scores = model.score_pairs(tracks, &cands, regions);
+    regions
+        .pairs
+        .iter()
+        .zip(scores)
+        .filter_map(|(&(t, d), s): (&(usize, usize), Option<PairScore>)| {
+            let s = s.filter(|_| same_class(t, d))?;
+            Some((t, d, s.cost, s.absolute))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stage_order_follows_the_config() {
+        let names = |c: &Config| stages(c).iter().map(|s| s.name).collect::<Vec<_>>();
+        let d = Config::default();
+        assert_eq!(names(&d), ["active", "low", "tentative", "reid"]);
+        let second = Config {
+            lost_second: true,
+            ..Config::default()
+        };
+        assert_eq!(
+            names(&second),
+            ["confirmed", "lost", "low", "tentative", "reid"]
+        );
+        let m = Config::masks();
+        assert_eq!(names(&m), ["confirmed", "low", "reid", "tentative"]);
+        let s = stages(&m);
+        assert_eq!(s[1].max_cost, m.max_cost_low);
+        assert_eq!(s[2].costs, StageCosts::Reid);
+        assert_eq!(s[2].max_cost, m.reid_max_cost);
+    }
+}

@@ -1,0 +1,139 @@
+//! Detector-split shapes put back together ([`Config::merge_fragments`]): a matched mask
+//! detection smaller than its track's whole shape, touching an unmatched detection that lies
+//! where the track is predicted and that no other track can take, is one shape the detector
+//! split in two (a limb cut off at a thin joint, a shadow line across a car): the two are
+//! merged (mask union) before the track is updated, and the fragment starts no track of its
+//! own.
+//!
+//! [`Config::merge_fragments`]: super::Config::merge_fragments
+
+use std::borrow::Cow;
+
+use super::associate::{Edge, Pair};
+use super::features::FeatureExtractor;
+use super::lifecycle::Track;
+use super::prepare::Prepared;
+use super::TrackError;
+use crate::frame::{Detection, Frame, Mask};
+
+/// Largest gap, in pixels, between the shells of a detection and a fragment merged into it:
+/// the pieces of one split mask touch, up to the detector's morphology (1–2 px).
+const FRAGMENT_GAP_PX: f64 = 3.0;
+/// A fragment must lie inside the track's predicted box grown by this fraction of its larger
+/// side ...
+const NEAR_MARGIN: f64 = 0.1;
+/// ... by at least this fraction of its own box (intersection over its area).
+const MIN_INSIDE: f64 = 0.8;
+/// The merged area may exceed the track's reference area by at most this factor: two pieces
+/// of one shape add up to about the shape (plus dilation), a neighbour would add much more.
+const MAX_UNION_RATIO: f64 = 1.3;
+
+/// What the merge reads from the tracker.
+pub(crate) struct Merge<'x> {
+    /// A fragment another track could take with a cost up to this is claimed, not merged
+    /// ([`Config::max_cost`](super::Config::max_cost)).
+    pub(crate) max_cost: f64,
+    /// Views smaller than this fraction of the reference area are partial
+    /// ([`AppearanceConfig::whole_ratio`](super::AppearanceConfig::whole_ratio)).
+    pub(crate) whole_ratio: f64,
+    /// Computes the merged detection's features.
+    pub(crate) extractor: &'x dyn FeatureExtractor,
+}
+
+/// Merges fragments into the matched detections of `matches` (module docs): a merged
+/// fragment is marked used in `det_used`, and its partner's detection and features are
+/// replaced by the union's (features from `limits.extractor`, on `frame`).
+pub(crate) fn merge_fragments(
+    tracks: &[Track],
+    matches: &[Pair],
+    main: &[Edge],
+    dets: &mut [Prepared<'_>],
+    det_used: &mut [bool],
+    limits: &Merge<'_>,
+    frame: Option<&Frame<'_>>,
+) -> Result<(), TrackError> {
+    for m in matches {
+        let Some(t) = tracks.get(m.track) else {
+            continue;
+        };
+        let ref_area = t.reference_area();
+        let (Some(md), true) = (dets.get(m.det), ref_area > 0.0) else {
+            continue;
+        };
+        if md.det.mask.is_none() || md.features.area >= limits.whole_ratio * ref_area {
+            continue;
+        }
+        let p = t.predicted_box();
+        let near = p.expanded(NEAR_MARGIN * p.w.max(p.h));
+        let Some(m_shell) = md.features.shell.clone() else {
+            continue;
+        };
+        let mut best: Option<(usize, f64)> = None;
+        for (j, f) in dets.iter().enumerate() {
+            let free = !det_used.get(j).copied().unwrap_or(true);
+            let claimed = main
+                .iter()
+                .any(|&(ot, od, _, gate)| od == j && ot != m.track && gate <= limits.max_cost);
+            let (Some(fs), true) = (f.features.shell.as_ref(), free && !claimed) else {
+                continue;
+            };
+            let union_area = md.features.area + f.features.area;
+            if f.det.bbox.ioa(&near) < MIN_INSIDE || union_area > MAX_UNION_RATIO * ref_area {
+                continue;
+            }
+            let gap = m_shell.distance(fs);
+            if gap <= FRAGMENT_GAP_PX && best.is_none_or(|(_, g)| gap < g) {
+                best = Some((j, gap));
+            }
+        }
+        let Some((j, _)) = best else {
+            continue;
+        };
+        let (Some(a), Some(b)) = (
+            dets.get(m.det).and_then(|d| d.det.mask.as_ref()),
+            dets.get(j).and_then(|d| d.det.mask.as_ref()),
+        ) else {
+            continue;
+        };
+        let union = mask_union(a, b);
+        let (score, class, index) = match (dets.get(m.det), dets.get(j)) {
+            (Some(a), Some(b)) => (a.det.score.max(b.det.score), a.det.class, a.index),
+            _ => continue,
+        };
+        let merged = Detection {
+            bbox: union.bbox(),
+            mask: Some(union),
+            score,
+            class,
+        };
+        let features = limits
+            .extractor
+            .extract(frame, &merged)
+            .map_err(|message| TrackError::Features { index, message })?;
+        if let Some(d) = dets.get_mut(m.det) {
+            d.det = Cow::Owned(merged);
+            d.features = features;
+        }
+        if let Some(u) = det_used.get_mut(j) {
+            *u = true;
+        }
+    }
+    Ok(())
+}
+
+/// The union of two masks, in the bitmap of their joint rectangle.
+fn mask_union(a: &Mask, b: &Mask) -> Mask {
+    let x0 = a.x().min(b.x());
+    let y0 = a.y().min(b.y());
+    let x1 = (a.x() as i64 + a.width() as i64).max(b.x() as i64 + b.width() as i64);
+    let y1 = (a.y() as i64 + a.height() as i64).max(b.y() as i64 + b.height() as i64);
+    let (w, h) = ((x1 - x0 as i64) as u32, (y1 - y0 as i64) as u32);
+    let mut bits = vec![0u8; w as usize * h as usize];
+    for (x, y) in a.pixels().chain(b.pixels()) {
+        let i = (y - y0) as usize * w as usize + (x - x0) as usize;
+        if let Some(v) = bits.get_mut(i) {
+            *v = 1;
+        }
+    }
+    Mask::new(x0, y0, w, h, bits).unwrap_or_else(|_| a.clone())
+}
