@@ -5,36 +5,36 @@
 //!   → merge fragments → update matched → refresh appearance → age → coast → spawn
 //! ```
 //!
-//! - **prepare** ([`super::prepare`]): validate the detections (typed errors, before any state
+//! - **prepare** (`prepare`): validate the detections (typed errors, before any state
 //!   changes), clip masks to the frame, drop detections below `min_score`, with zero area or
 //!   an empty mask, split the rest into high and low confidence, and compute each one's cheap
 //!   [`Features`](super::Features) once (centroid, area, and for masks the convex shell).
-//! - **predict**: every track's motion filter steps one frame ([`Track::predict`]).
+//! - **predict**: every track's motion filter steps one frame (`Track::predict`).
 //! - **estimate regions** (thesis Alg. 2): box mode: the predicted boxes, grown by a margin
 //!   that widens while a track is unmatched, meet the detections' boxes
-//!   ([`estimate_regions`]). With masks: each track's search shell ([`Track::search_shell`])
+//!   ([`estimate_regions`]). With masks: each track's search shell (`Track::search_shell`)
 //!   meets the detections' shells by GJK ([`crate::region::region_clusters`]). Only pairs
 //!   inside a cluster are ever scored.
-//! - **describe** ([`super::describe`]): appearance for the detections of clusters that
+//! - **describe** (`describe`): appearance for the detections of clusters that
 //!   geometry cannot decide.
 //! - **score pairs**: the [`CostModel`] combines the enabled [`PairCost`] terms per pair;
 //!   cluster-normalised terms (C1, C2) rank pairs, thresholds compare the others.
 //! - **associate** ([`super::associate`]): the stages [`stages`] builds from the config, run
 //!   in turn, each an optimal assignment; the re-identification stage scores its pairs when
 //!   its turn comes (describing its detections then).
-//! - **merge fragments** ([`super::fragments`]): a detector-split shape is put back together
+//! - **merge fragments** (`fragments`): a detector-split shape is put back together
 //!   before its track is updated.
-//! - **update matched**: [`Track::hit`] for every match (amodal completion, filter, sizes,
+//! - **update matched**: `Track::hit` for every match (amodal completion, filter, sizes,
 //!   appearance); tentative tracks with enough hits are confirmed and get an id (or, with
 //!   [`Config::reid_at_confirmation`], a lost track they re-identify takes them over,
-//!   [`Track::absorb`]); lost tracks are re-identified under their old id.
+//!   `Track::absorb`); lost tracks are re-identified under their old id.
 //! - **refresh appearance**: matched tracks' appearance is taken now when it will be needed
-//!   and this frame is the last chance to see it ([`super::describe`]).
-//! - **age**: unmatched tracks miss a frame ([`Track::miss`]): tentative ones are removed after
+//!   and this frame is the last chance to see it (`describe`).
+//! - **age**: unmatched tracks miss a frame (`Track::miss`): tentative ones are removed after
 //!   `max_tentative_misses`, confirmed ones become lost and are removed after `max_lost`.
 //! - **coast**: with [`Config::coast_frames`], confirmed tracks seen whole and missed for at
-//!   most that many frames are reported at their predicted place ([`Track::coast`]).
-//! - **spawn**: confident unmatched detections start tentative tracks ([`Track::born`]), each
+//!   most that many frames are reported at their predicted place (`Track::coast`).
+//! - **spawn**: confident unmatched detections start tentative tracks (`Track::born`), each
 //!   with an appearance (so that no track lacks the appearance terms its rivals have).
 //!
 //! **What is reported.** Each call returns the confirmed tracks matched in this frame, with the
@@ -351,7 +351,7 @@ impl Tracker {
         Regions::from(region_clusters(&track_shells, &det_shells))
     }
 
-    /// Appearance for the detections geometry cannot decide (see [`super::describe`]). With
+    /// Appearance for the detections geometry cannot decide (see `describe`). With
     /// [`Config::lost_reid_only`], lost tracks do not take part in the main association and
     /// do not count: the reid stage describes the detections it needs once the others have
     /// taken theirs.
@@ -465,7 +465,7 @@ impl Tracker {
         })
     }
 
-    /// Every match updates its track ([`Track::hit`]); tentative tracks with enough hits are
+    /// Every match updates its track (`Track::hit`); tentative tracks with enough hits are
     /// confirmed (or absorbed by the lost track they re-identify), confirmed and lost ones
     /// report their shape. Returns which tracks were matched.
     fn update_matched(
@@ -578,7 +578,7 @@ impl Tracker {
         best.map(|(i, _)| i)
     }
 
-    /// Takes now the appearance matched tracks will need later (see [`super::describe`]):
+    /// Takes now the appearance matched tracks will need later (see `describe`):
     /// before a crossing, and while the reference view is missing or stale.
     fn refresh_appearance(
         &mut self,
