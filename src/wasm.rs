@@ -1061,6 +1061,17 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub new_track_score: Option<f64>,
+    /// Score thresholds from the sequence's own scores (`{ high_quantile, birth_quantile,
+    /// window, warmup }`, absent fields at their defaults); `null`: the fixed thresholds.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(
+        optional,
+        type = "{ high_quantile?: number, birth_quantile?: number, window?: number, warmup?: number } | null"
+    )]
+    pub score_adaptation: Option<Option<serde_json::Value>>,
     /// An unmatched detection overlapping a matched one by more than this IoU starts no track.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1180,6 +1191,18 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub coast_frames: Option<u32>,
+    /// Frames per second of the video (time-measuring frame counts scale to it); `null`:
+    /// unknown, counts used as given.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub frame_rate: Option<Option<f64>>,
+    /// The frame rate `max_lost` and `coast_frames` are given at.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub frame_counts_at: Option<f64>,
 }
 
 impl TrackerConfig {

@@ -5,6 +5,7 @@
 //! so a JSON config only needs the fields it changes: `{"max_lost": 60}` is a valid config.
 
 use super::features::{AppearanceConfig, Needs};
+use super::scores::ScoreAdaptation;
 use super::TrackError;
 use crate::features::sift::MatchConfig;
 use crate::motion::BoxKalmanParams;
@@ -181,6 +182,10 @@ pub struct Config {
     pub high_score: f64,
     /// Score an unmatched detection needs to start a new (tentative) track. Default 0.9.
     pub new_track_score: f64,
+    /// Score thresholds from the sequence's own scores instead of `high_score` and
+    /// `new_track_score` (see [`super::scores`]): quantiles of the scores of the detections
+    /// matched to confirmed tracks. `None`: the fixed thresholds.
+    pub score_adaptation: Option<ScoreAdaptation>,
     /// An unmatched detection overlapping a detection matched this frame by more than this IoU
     /// does not start a track: it is most likely a duplicate box on an already tracked object.
     /// Default 1 (disabled): on MOT15 the detector's own NMS leaves few duplicates.
@@ -193,7 +198,8 @@ pub struct Config {
     /// miss (ByteTrack).
     pub max_tentative_misses: u32,
     /// Frames a confirmed track stays lost (searchable, re-identified under its id) before it
-    /// is removed. Default 15.
+    /// is removed, at [`Config::frame_counts_at`] frames per second (scaled to the video's
+    /// [`Config::frame_rate`] when known). Default 15.
     pub max_lost: u32,
     /// When a tentative track is confirmed, also report its earlier (tentative) frames, so the
     /// output does not miss the first `min_hits − 1` frames of every track. The shapes are
@@ -290,6 +296,14 @@ pub struct Config {
     /// detection. Default 0 (never invent shapes online, as on MOT15 boxes); the mask preset
     /// ([`Config::masks`]) uses 2.
     pub coast_frames: u32,
+    /// Frames per second of the video, when known (the CLI reads it from `seqinfo.ini`, the
+    /// offline tracker is given it): frame counts that measure time ([`Config::max_lost`],
+    /// [`Config::coast_frames`]) are scaled from [`Config::frame_counts_at`] to it, so a lost
+    /// track is kept as long in seconds at 5 fps as at 30. `None`: counts are used as given.
+    pub frame_rate: Option<f64>,
+    /// The frame rate those frame counts are given at. Default 30 (ByteTrack's convention:
+    /// `track_buffer` 30 frames at 30 fps).
+    pub frame_counts_at: f64,
 }
 
 impl Default for Config {
@@ -300,6 +314,7 @@ impl Default for Config {
             min_score: 0.0,
             high_score: 0.6,
             new_track_score: 0.9,
+            score_adaptation: None,
             spawn_max_iou: 1.0,
             min_hits: 5,
             max_tentative_misses: 0,
@@ -334,6 +349,8 @@ impl Default for Config {
             sliver_ratio: 0.4,
             merge_fragments: false,
             coast_frames: 0,
+            frame_rate: None,
+            frame_counts_at: 30.0,
         }
     }
 }
@@ -457,6 +474,11 @@ impl Config {
         )?;
         let r = self.reid_max_cost;
         check("reid_max_cost", r, r >= 0.0, "must be ≥ 0")?;
+        if let Some(f) = self.frame_rate {
+            check("frame_rate", f, f > 0.0, "must be > 0")?;
+        }
+        let f = self.frame_counts_at;
+        check("frame_counts_at", f, f > 0.0, "must be > 0")?;
         for (name, t) in self
             .terms
             .named()
@@ -471,6 +493,14 @@ impl Config {
                 check(&format!("terms.{name}.gate"), g, true, "must be finite")?;
             }
         }
+        if let Some(a) = &self.score_adaptation {
+            a.validate()
+                .map_err(|(field, value, reason)| TrackError::InvalidConfig {
+                    field: field.to_string(),
+                    value,
+                    reason,
+                })?;
+        }
         self.motion.validate()?;
         self.appearance
             .validate()
@@ -480,6 +510,18 @@ impl Config {
                 reason,
             })?;
         Ok(())
+    }
+
+    /// `frames` (a count given at [`Config::frame_counts_at`] fps) at the video's frame rate:
+    /// scaled and rounded when [`Config::frame_rate`] is known, at least 1 when `frames` is.
+    pub fn frames(&self, frames: u32) -> u32 {
+        match self.frame_rate {
+            Some(fps) if frames > 0 => {
+                let n = (frames as f64 * fps / self.frame_counts_at).round();
+                (n.clamp(1.0, u32::MAX as f64)) as u32
+            }
+            _ => frames,
+        }
     }
 
     /// The appearance parts the enabled terms read (the tracker computes only those).

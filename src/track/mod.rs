@@ -43,6 +43,7 @@ pub mod offline;
 pub mod online;
 mod prepare;
 pub mod regions;
+pub mod scores;
 pub mod sequence;
 mod timing;
 
@@ -60,6 +61,7 @@ pub use features::{
 pub use lifecycle::Track;
 pub use online::Tracker;
 pub use regions::{estimate_regions, Cluster, Regions};
+pub use scores::{ScoreAdaptation, Thresholds};
 pub use sequence::{detections_by_frame, to_records, track_sequence};
 pub use timing::PhaseTimes;
 

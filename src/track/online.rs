@@ -61,8 +61,9 @@ use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
 use super::fragments::{merge_fragments, Merge};
 use super::lifecycle::{BoxMotion, Track};
-use super::prepare::{prepare, Prepared};
+use super::prepare::{kept, prepare, validate, Prepared};
 use super::regions::{estimate_regions, Regions};
+use super::scores::{ScoreStats, Thresholds};
 use super::timing::{Phase, PhaseTimes, Timer};
 use super::TrackError;
 use crate::assign::Unmatched;
@@ -90,6 +91,10 @@ pub struct Tracker {
     next_id: u64,
     /// Size of the frames seen so far (width, height).
     frame_size: Option<(u32, u32)>,
+    /// The sequence's scores, for adaptive thresholds.
+    scores: ScoreStats,
+    /// The score thresholds of the current frame.
+    thresholds: Thresholds,
     timer: Timer,
 }
 
@@ -125,6 +130,11 @@ impl Tracker {
             ColourMode::Contained,
         );
         let needs = config.appearance_needs();
+        let scores = ScoreStats::new(config.score_adaptation.unwrap_or_default());
+        let thresholds = Thresholds {
+            high: config.high_score,
+            birth: config.new_track_score,
+        };
         Ok(Self {
             stages: stages(&config),
             costs,
@@ -137,6 +147,8 @@ impl Tracker {
             frame: 0,
             next_id: 1,
             frame_size: None,
+            scores,
+            thresholds,
             timer: Timer::default(),
         })
     }
@@ -223,8 +235,9 @@ impl Tracker {
         detections: &[Detection],
     ) -> Result<Vec<TrackedShape>, TrackError> {
         self.check_frame_size(frame)?;
-        let cfg = &self.config;
-        let (min, high) = (cfg.min_score, cfg.high_score);
+        validate(detections)?;
+        self.thresholds = self.next_thresholds(detections);
+        let (min, high) = (self.config.min_score, self.thresholds.high);
         let extractor = self.extractor.as_ref();
         let mut dets = self.timer.time(Phase::Features, || {
             prepare(detections, frame, min, high, extractor)
@@ -275,6 +288,28 @@ impl Tracker {
         })?;
         self.timer.frame_done();
         Ok(out)
+    }
+
+    /// The score thresholds of this frame: the fixed ones, or with
+    /// [`Config::score_adaptation`] quantiles of the sequence's scores including this frame's
+    /// (so the first frame already has some).
+    fn next_thresholds(&mut self, detections: &[Detection]) -> Thresholds {
+        let fixed = Thresholds {
+            high: self.config.high_score,
+            birth: self.config.new_track_score,
+        };
+        if self.config.score_adaptation.is_none() {
+            return fixed;
+        }
+        for d in detections.iter().filter(|d| kept(d, self.config.min_score)) {
+            self.scores.observe(d.score);
+        }
+        self.scores.thresholds(fixed)
+    }
+
+    /// The score thresholds in force for the last frame.
+    pub fn thresholds(&self) -> Thresholds {
+        self.thresholds
     }
 
     /// Runs `f` on the tracker as phase `phase` of the timing.
@@ -494,6 +529,7 @@ impl Tracker {
                 }
                 _ => {
                     t.found();
+                    self.scores.observe_matched(d.det.score);
                     if let Some(id) = t.id() {
                         out.push(shape_of(frame, id, TrackState::Confirmed, d, m.cost));
                         t.reported(frame);
@@ -522,6 +558,7 @@ impl Tracker {
                     m.track
                 }
             };
+            self.scores.observe_matched(d.det.score);
             let t = &mut self.tracks[target];
             t.found();
             let Some(id) = t.id() else {
@@ -624,7 +661,10 @@ impl Tracker {
 
     /// Unmatched tracks miss a frame; removed ones are dropped.
     fn age(&mut self, matched: &[bool]) {
-        let (tentative, lost) = (self.config.max_tentative_misses, self.config.max_lost);
+        let (tentative, lost) = (
+            self.config.max_tentative_misses,
+            self.config.frames(self.config.max_lost),
+        );
         for (i, t) in self.tracks.iter_mut().enumerate() {
             if !matched.get(i).copied().unwrap_or(false) {
                 t.miss(tentative, lost);
@@ -636,7 +676,7 @@ impl Tracker {
     /// Reports confirmed tracks missed right after a whole view at their predicted place
     /// ([`Config::coast_frames`]).
     fn coast(&mut self, out: &mut Vec<TrackedShape>) {
-        let max = self.config.coast_frames;
+        let max = self.config.frames(self.config.coast_frames);
         if max == 0 {
             return;
         }
@@ -669,7 +709,7 @@ impl Tracker {
         for (j, d) in dets.iter().enumerate() {
             if det_used.get(j).copied().unwrap_or(true)
                 || !d.high
-                || d.det.score < self.config.new_track_score
+                || d.det.score < self.thresholds.birth
                 || duplicate(d)
             {
                 continue;

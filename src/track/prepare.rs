@@ -78,9 +78,15 @@ pub(crate) fn validate(detections: &[Detection]) -> Result<(), TrackError> {
     Ok(())
 }
 
-/// The valid detections of a frame (see [`validate`]) scoring at least `min_score`, clipped to
-/// the frame, with their cheap features; those scoring at least `high_score` are high.
-/// Zero-area boxes and empty masks carry no overlap information: they are skipped, not errors.
+/// Whether a valid detection takes part at all: it scores at least `min_score` and has an
+/// area (zero-area boxes carry no overlap information: they are skipped, not errors).
+pub(crate) fn kept(det: &Detection, min_score: f64) -> bool {
+    det.score >= min_score && det.bbox.w > 0.0 && det.bbox.h > 0.0
+}
+
+/// The detections of a frame, already [`validate`]d, that are [`kept`], clipped to the frame
+/// (empty masks dropped), with their cheap features; those scoring at least `high_score` are
+/// high.
 pub(crate) fn prepare<'a>(
     detections: &'a [Detection],
     frame: Option<&Frame<'_>>,
@@ -88,10 +94,9 @@ pub(crate) fn prepare<'a>(
     high_score: f64,
     extractor: &dyn FeatureExtractor,
 ) -> Result<Vec<Prepared<'a>>, TrackError> {
-    validate(detections)?;
     let mut out = Vec::with_capacity(detections.len());
     for (index, det) in detections.iter().enumerate() {
-        if det.score < min_score || det.bbox.w <= 0.0 || det.bbox.h <= 0.0 {
+        if !kept(det, min_score) {
             continue;
         }
         let Some(det) = clip_to_frame(det, frame) else {

@@ -179,6 +179,16 @@ pub fn run(args: Args) -> crate::CliResult {
     if !(fps.is_finite() && fps > 0.0) {
         return Err(format!("--fps must be a positive number, got {fps}").into());
     }
+    // The online tracker scales its time-measuring frame counts to the video's rate, unless
+    // the config says otherwise.
+    let known_fps = args.fps.or(seqinfo.as_ref().map(|s| s.frame_rate));
+    let mut online_config = online_config;
+    if online_config.frame_rate.is_none() {
+        online_config.frame_rate = known_fps;
+    }
+    if offline_config.online.frame_rate.is_none() {
+        offline_config.online.frame_rate = known_fps;
+    }
 
     // MOTS files may number frames from 0 (KITTI-MOTS); the tracker counts from 1.
     let first_frame = records.iter().map(|r| r.frame).min().unwrap_or(1).min(1);
