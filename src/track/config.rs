@@ -4,6 +4,7 @@
 //! the repository's tracking notes); they are not tuned per sequence. Every field has a default,
 //! so a JSON config only needs the fields it changes: `{"max_lost": 60}` is a valid config.
 
+use super::coasting::Coasting;
 use super::features::{AppearanceConfig, Needs};
 use super::scores::ScoreAdaptation;
 use super::TrackError;
@@ -296,6 +297,10 @@ pub struct Config {
     /// detection. Default 0 (never invent shapes online, as on MOT15 boxes); the mask preset
     /// ([`Config::masks`]) uses 2.
     pub coast_frames: u32,
+    /// Coast only when this tracker's history says a gap of the current length usually
+    /// closes within `coast_frames` (see [`super::coasting`]). `None`: always coast up to
+    /// `coast_frames` after a whole view.
+    pub coasting: Option<Coasting>,
     /// Frames per second of the video, when known (the CLI reads it from `seqinfo.ini`, the
     /// offline tracker is given it): frame counts that measure time ([`Config::max_lost`],
     /// [`Config::coast_frames`]) are scaled from [`Config::frame_counts_at`] to it, so a lost
@@ -349,6 +354,7 @@ impl Default for Config {
             sliver_ratio: 0.4,
             merge_fragments: false,
             coast_frames: 0,
+            coasting: None,
             frame_rate: None,
             frame_counts_at: 30.0,
         }
@@ -492,6 +498,14 @@ impl Config {
             if let Some(g) = t.gate {
                 check(&format!("terms.{name}.gate"), g, true, "must be finite")?;
             }
+        }
+        if let Some(a) = &self.coasting {
+            a.validate()
+                .map_err(|(field, value, reason)| TrackError::InvalidConfig {
+                    field: field.to_string(),
+                    value,
+                    reason,
+                })?;
         }
         if let Some(a) = &self.score_adaptation {
             a.validate()

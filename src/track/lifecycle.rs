@@ -414,7 +414,8 @@ impl Track {
     /// The shape to report for a confirmed track missed for at most `max_frames` frames right
     /// after a whole view (see [`Config::coast_frames`]): its last mask (or box) moved by the
     /// predicted motion and clipped to the frame `size`, marked interpolated. `None` when the
-    /// track does not coast in tracker frame `frame`.
+    /// track does not coast in tracker frame `frame`, or when a box track is predicted mostly
+    /// out of the frame (it has left).
     pub(crate) fn coast(
         &mut self,
         frame: u32,
@@ -428,6 +429,13 @@ impl Track {
         let s = self.predicted_shift();
         if !(s.x.is_finite() && s.y.is_finite()) {
             return None;
+        }
+        if let (None, Some((w, h))) = (&self.last.mask, size) {
+            // A box predicted mostly out of view has left: reporting it would be a false box.
+            let view = BBox::new(0.0, 0.0, w as f64, h as f64);
+            if self.predicted.ioa(&view) < 0.5 {
+                return None;
+            }
         }
         let (mask, bbox) = match &self.last.mask {
             Some(m) => {

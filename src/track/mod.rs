@@ -33,6 +33,7 @@
 mod amodal;
 pub mod appearance;
 pub mod associate;
+pub mod coasting;
 pub mod config;
 pub mod cost;
 mod describe;
@@ -49,6 +50,7 @@ mod timing;
 
 pub use appearance::{ColourCost, ColourMode, ShapeContextCost, SiftCost, TrackSide};
 pub use associate::{Stage, StageCosts, StageDetections, StageTracks};
+pub use coasting::Coasting;
 pub use config::{Config, ShapeVariant, TermConfig, Terms};
 pub use cost::{
     Candidate, CentreDistanceCost, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,

@@ -55,6 +55,7 @@ use std::sync::Arc;
 
 use super::appearance::{cost_model, ColourMode, TrackSide};
 use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
+use super::coasting::GapStats;
 use super::config::Config;
 use super::cost::{CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
@@ -95,6 +96,8 @@ pub struct Tracker {
     scores: ScoreStats,
     /// The score thresholds of the current frame.
     thresholds: Thresholds,
+    /// How this tracker's gaps ended, for adaptive coasting.
+    gaps: GapStats,
     timer: Timer,
 }
 
@@ -149,6 +152,7 @@ impl Tracker {
             frame_size: None,
             scores,
             thresholds,
+            gaps: GapStats::default(),
             timer: Timer::default(),
         })
     }
@@ -178,6 +182,13 @@ impl Tracker {
     /// Time spent per phase since [`Tracker::with_clock`] (all zero without a clock).
     pub fn phase_times(&self) -> PhaseTimes {
         self.timer.times()
+    }
+
+    /// Tells the tracker the frame size when it gets no frames (box mode), so that box tracks
+    /// predicted out of view are not coasted; frames of another size are then an error.
+    pub fn with_image_size(mut self, width: u32, height: u32) -> Self {
+        self.frame_size = Some((width, height));
+        self
     }
 
     /// Replaces the feature extractor. The tracker still asks it for appearance only where
@@ -519,6 +530,9 @@ impl Tracker {
             };
             matched[m.track] = true;
             let t = &mut self.tracks[m.track];
+            if t.id().is_some() {
+                self.gaps.closed(t.misses());
+            }
             t.hit(&d.det, &d.features, frame, &self.config)?;
             match t.state() {
                 TrackState::Tentative if t.hits() >= min_hits => confirming.push(*m),
@@ -548,6 +562,7 @@ impl Tracker {
                 Some(lost) => {
                     matched[lost] = true;
                     let (l, newer) = two_mut(&mut self.tracks, lost, m.track);
+                    self.gaps.closed(l.misses());
                     l.hit(&d.det, &d.features, frame, &self.config)?;
                     l.absorb(newer);
                     lost
@@ -668,6 +683,9 @@ impl Tracker {
         for (i, t) in self.tracks.iter_mut().enumerate() {
             if !matched.get(i).copied().unwrap_or(false) {
                 t.miss(tentative, lost);
+                if t.state() == TrackState::Removed && t.id().is_some() {
+                    self.gaps.ended(t.misses());
+                }
             }
         }
         self.tracks.retain(|t| t.state() != TrackState::Removed);
@@ -681,9 +699,14 @@ impl Tracker {
             return;
         }
         let (frame, size) = (self.frame, self.frame_size);
+        let (gaps, adaptive) = (&self.gaps, self.config.coasting);
+        let likely = |misses: u32| {
+            adaptive.is_none_or(|c| gaps.closes_within(misses, max) >= c.min_probability)
+        };
         out.extend(
             self.tracks
                 .iter_mut()
+                .filter(|t| likely(t.misses()))
                 .filter_map(|t| t.coast(frame, size, max)),
         );
     }

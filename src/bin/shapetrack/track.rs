@@ -214,7 +214,11 @@ pub fn run(args: Args) -> crate::CliResult {
     let mut online = if args.offline {
         None
     } else {
-        Some(Tracker::new(online_config)?)
+        let t = Tracker::new(online_config)?;
+        Some(match image_size {
+            Some((w, h)) => t.with_image_size(w, h),
+            None => t,
+        })
     };
     let mut offline = if args.offline {
         let t = OfflineTracker::new(offline_config, fps)?;

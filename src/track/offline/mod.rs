@@ -362,10 +362,11 @@ impl OfflineTracker {
         })
     }
 
-    /// Tells the re-linker the image size (frames given to [`OfflineTracker::push_frame`] tell
-    /// it too).
+    /// Tells the re-linker and the online tracker the image size (frames given to
+    /// [`OfflineTracker::push_frame`] tell them too).
     pub fn with_image_size(mut self, width: u32, height: u32) -> Self {
         self.seq.image_size = Some((width, height));
+        self.tracker = self.tracker.with_image_size(width, height);
         self
     }
 
