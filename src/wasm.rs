@@ -1191,6 +1191,14 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub coast_frames: Option<u32>,
+    /// Coast only when this tracker's own gaps of that length usually close
+    /// (`{ min_probability }`); `null`: always coast up to `coast_frames`.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "{ min_probability?: number } | null")]
+    pub coasting: Option<Option<serde_json::Value>>,
     /// Frames per second of the video (time-measuring frame counts scale to it); `null`:
     /// unknown, counts used as given.
     #[serde(
