@@ -19,6 +19,7 @@
 //! - [`eval`]: MOT (CLEAR, Identity, HOTA) and VOT (accuracy, robustness, EAO) metrics.
 //! - [`io`]: MOTChallenge, MOTS, COCO-video, CVAT XML, PNG masks, VOT files.
 //! - [`synth`]: deterministic synthetic scenes with ground truth.
+//! - `grid` (native only): the robustness grid — datasets × detector models × trackers.
 //!
 //! The core never imports wasm-bindgen; the browser bindings live in `wasm` (wasm32 only).
 #![deny(missing_docs)]
@@ -29,6 +30,8 @@ pub mod eval;
 pub mod features;
 pub mod frame;
 pub mod geometry;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod grid;
 pub mod io;
 pub mod motion;
 pub mod region;

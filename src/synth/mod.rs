@@ -37,8 +37,8 @@
 //! frame `t` is `center + (t − 1)·velocity`.
 
 mod background;
-mod math;
-mod noise;
+pub(crate) mod math;
+pub(crate) mod noise;
 mod raster;
 mod shape;
 

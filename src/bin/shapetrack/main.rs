@@ -6,6 +6,7 @@
 mod bench;
 mod eval;
 mod eval_vot;
+mod grid;
 mod synth;
 mod track;
 
@@ -38,6 +39,8 @@ enum Cmd {
     Synth(synth::Args),
     /// Measure speed (frames per second) of the tracker and its stages.
     Bench(bench::Args),
+    /// The robustness grid: datasets × detector models × trackers.
+    Grid(grid::Args),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +51,7 @@ fn main() -> ExitCode {
         Cmd::EvalVot(a) => eval_vot::run(a),
         Cmd::Synth(a) => synth::run(a),
         Cmd::Bench(a) => bench::run(a),
+        Cmd::Grid(a) => grid::run(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,294 @@
+#!/usr/bin/env python3
+"""The robustness grid, in one command: datasets x detector models x {ours online, ours offline,
+ours with masks where the cell has masks, each peer}, all on the same detections, scored by our
+eval and by TrackEval; writes tests/data/quality/grid.md and grid.json.
+
+Usage: scripts/grid.py [--cells GLOB,..] [--datasets D,..] [--peers LIST] [--out DIR]
+                       [--venv DIR] [--bin PATH] [--no-trackeval] [--jobs N]
+
+  --cells     only cells whose dataset/model name matches (`*` wildcard, comma-separated)
+  --datasets  mot15,sportsmot,bdd,bdd-masks,synth (default: all)
+  --peers     rf_sort,rf_bytetrack,norfair,ocsort,motpy (default: all)
+  --out       work folder (default: target/grid)
+  --venv      Python venv with TrackEval and the peers, or a cache folder holding one as DIR/venv
+              (default: $SHAPETRACK_PEERS_VENV, else ~/.cache/shapetrack/peers); created with
+              ../shared/tools/peers/setup_venv.sh when missing, and OC-SORT's own venv beside it
+              (ocsort-venv: numpy<2, its pinned scipy and filterpy): that needs PyPI once
+  --bin       shapetrack binary (default: cargo build --release, then target/release/shapetrack)
+  --jobs      peer runs in parallel (default 1; this machine has 2 cores)
+  --write     where to write grid.md/grid.json (default tests/data/quality; `-` for nowhere)
+
+Stages: `shapetrack grid prepare` writes each cell in TrackEval's layout with its detections;
+`shapetrack grid run` runs ours; the peers run through ../shared/tools/peers/run_baseline.py
+(OC-SORT through scripts/peers/ocsort_runner.py), with their plain defaults, timed inside their
+update calls; `shapetrack grid score` and TrackEval (run_trackeval_mot.py, BENCHMARK MOT15, one
+ground-truth root per cell) score every tracker folder. Only the standard library is needed to
+run this script itself.
+"""
+import argparse, concurrent.futures, datetime, json, os, re, subprocess, sys, time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.normpath(os.path.join(HERE, ".."))
+SHARED = os.environ.get("SHAPETRACK_SHARED", os.path.normpath(os.path.join(REPO, "..", "shared")))
+TOOLS = os.path.join(SHARED, "tools", "peers")
+PEERS = ["rf_sort", "rf_bytetrack", "norfair", "ocsort", "motpy"]
+NAMES = {"rf_sort": "SORT", "rf_bytetrack": "ByteTrack", "norfair": "norfair", "ocsort": "OC-SORT",
+         "motpy": "motpy", "ours-online": "ours online", "ours-offline": "ours offline",
+         "ours-masks-online": "ours masks online", "ours-masks-offline": "ours masks offline"}
+
+
+def sh(cmd, **kw):
+    r = subprocess.run(cmd, capture_output=True, text=True, **kw)
+    if r.returncode != 0:
+        sys.exit(f"command failed ({r.returncode}): {' '.join(cmd)}\n{r.stdout}\n{r.stderr}")
+    return r.stdout
+
+
+def ensure_venv(path):
+    for cand in (path, os.path.join(path, "venv")):
+        py = os.path.join(cand, "bin", "python")
+        if os.path.exists(py):
+            break
+    else:
+        path = os.path.abspath(path)
+        cache = os.path.dirname(path) if os.path.basename(path) == "venv" else path
+        os.makedirs(cache, exist_ok=True)
+        print(f"creating the peers venv in {cache}/venv (PyPI, once)...", file=sys.stderr)
+        sh(["bash", os.path.join(TOOLS, "setup_venv.sh"), cache])
+        py = os.path.join(cache, "venv", "bin", "python")
+    return py
+
+
+def ensure_ocsort_venv(path):
+    """OC-SORT (PyPI `ocsort` 0.0.2) in a venv of its own: its code needs numpy 1.x (numpy 2
+    refuses its `float()` of size-1 arrays) and pins scipy 1.9.3 and filterpy 1.4.5, which would
+    clash with TrackEval's venv. Its `lap==0.4.0` pin no longer builds; lap 0.5 has the same
+    `lapjv` API."""
+    py = os.path.join(path, "bin", "python")
+    if not os.path.exists(py):
+        print(f"creating the OC-SORT venv in {path} (PyPI, once)...", file=sys.stderr)
+        sh([sys.executable, "-m", "venv", path])
+    if subprocess.run([py, "-c", "import ocsort, filterpy, lap, scipy"], capture_output=True).returncode:
+        sh([py, "-m", "pip", "install", "-q", "numpy<2", "scipy==1.9.3", "filterpy==1.4.5", "lap>=0.5"])
+        sh([py, "-m", "pip", "install", "-q", "--no-deps", "ocsort==0.0.2"])
+    return py
+
+
+def cells_in(out):
+    return sorted(d for d in os.listdir(out) if "__" in d and os.path.isdir(os.path.join(out, d)))
+
+
+def seqs_of(cell_dir):
+    with open(os.path.join(cell_dir, "gt", "seqmaps", "MOT15-train.txt")) as f:
+        return [l.strip() for l in f.readlines()[1:] if l.strip()]
+
+
+def fps_of(cell_dir, seq):
+    text = open(os.path.join(cell_dir, "gt", "MOT15-train", seq, "seqinfo.ini")).read()
+    return float(re.search(r"^frameRate\s*=\s*(\S+)", text, re.M).group(1))
+
+
+def run_peer(py, peer, cell_dir, ocsort_py=None):
+    data = os.path.join(cell_dir, "trackers", "MOT15-train", peer, "data")
+    os.makedirs(data, exist_ok=True)
+    frames = secs = 0.0
+    for s in seqs_of(cell_dir):
+        det = os.path.join(cell_dir, "det", s + ".txt")
+        out = os.path.join(data, s + ".txt")
+        if os.path.getsize(det) == 0:
+            open(out, "w").close()
+            continue
+        if peer == "ocsort":
+            cmd = [ocsort_py, os.path.join(HERE, "peers", "ocsort_runner.py"), det, out]
+        else:
+            cmd = [py, os.path.join(TOOLS, "run_baseline.py"), peer, det, out, str(fps_of(cell_dir, s))]
+        line = sh(cmd)
+        m = re.search(r"frames=(\d+).*tracker_time=([\d.]+)s", line)
+        frames += int(m.group(1))
+        secs += float(m.group(2))
+    return frames / secs if secs > 0 else float("inf")
+
+
+def trackeval(py, cell_dir, tracker):
+    text = sh([py, os.path.join(TOOLS, "run_trackeval_mot.py"), os.path.join(cell_dir, "gt"),
+               os.path.join(cell_dir, "trackers"), "MOT15", tracker])
+    for line in text.splitlines():
+        p = line.split()
+        if len(p) >= 11 and p[0] == "SUMMARY" and p[1] == "COMBINED_SEQ":
+            return {"HOTA": float(p[2]), "DetA": float(p[3]), "AssA": float(p[4]),
+                    "MOTA": float(p[5]), "IDF1": float(p[7]), "IDSW": int(p[8])}
+    sys.exit(f"no COMBINED_SEQ row in TrackEval's output for {cell_dir} {tracker}")
+
+
+def fmt_cell(r, best):
+    if r is None:
+        return "–"
+    s = f"{r['HOTA']:.1f} / {r['IDF1']:.1f}"
+    return f"**{s}**" if best else s
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cells", default="")
+    ap.add_argument("--datasets", default="")
+    ap.add_argument("--peers", default=",".join(PEERS))
+    ap.add_argument("--out", default=os.path.join(REPO, "target", "grid"))
+    ap.add_argument("--venv", default=os.environ.get(
+        "SHAPETRACK_PEERS_VENV", os.path.expanduser("~/.cache/shapetrack/peers")))
+    ap.add_argument("--bin", default=None)
+    ap.add_argument("--no-trackeval", action="store_true")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--write", default=os.path.join(REPO, "tests", "data", "quality"))
+    a = ap.parse_args()
+    t_start = time.time()
+    stages = {}
+
+    py = ensure_venv(a.venv)
+    ocsort_py = None
+    if "ocsort" in a.peers.split(","):
+        ocsort_py = ensure_ocsort_venv(os.path.join(os.path.dirname(os.path.abspath(a.venv.rstrip("/"))),
+                                                    "ocsort-venv"))
+    binary = a.bin
+    if binary is None:
+        sh(["cargo", "build", "--release", "--quiet"], cwd=REPO)
+        binary = os.path.join(REPO, "target", "release", "shapetrack")
+    out = os.path.abspath(a.out)
+    os.makedirs(out, exist_ok=True)
+    sel = []
+    if a.cells:
+        sel += ["--cells", a.cells]
+    if a.datasets:
+        sel += ["--datasets", a.datasets]
+
+    t = time.time()
+    print("preparing cells...", file=sys.stderr)
+    sh([binary, "grid", "prepare", "--out", out] + sel)
+    stages["prepare"] = time.time() - t
+    t = time.time()
+    print("running ours...", file=sys.stderr)
+    ours_log = sh([binary, "grid", "run", "--dir", out, "--name", "ours"] + sel)
+    stages["ours"] = time.time() - t
+    ours_fps = {}
+    for line in ours_log.splitlines():
+        m = re.match(r"(\S+) (\S+): (\d+) frames in ([\d.]+) s", line)
+        if m:
+            ours_fps[(m.group(1), m.group(2))] = int(m.group(3)) / max(float(m.group(4)), 1e-9)
+
+    cells = [c for c in cells_in(out) if not sel or any(
+        re.fullmatch(p.replace("*", ".*"), c.replace("__", "/")) for p in (a.cells or "*").split(","))]
+    if a.datasets:
+        wanted = a.datasets.split(",")
+        cells = [c for c in cells if any(c.split("__")[0] == d or (d == "synth" and c.startswith("synth-"))
+                                         for d in wanted)]
+    peers = [p for p in a.peers.split(",") if p]
+    t = time.time()
+    peer_fps = {}
+    jobs = [(p, c) for c in cells for p in peers]
+    print(f"running {len(peers)} peers on {len(cells)} cells...", file=sys.stderr)
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        futs = {ex.submit(run_peer, py, p, os.path.join(out, c), ocsort_py): (p, c) for p, c in jobs}
+        for f in concurrent.futures.as_completed(futs):
+            peer_fps[futs[f]] = f.result()
+    stages["peers"] = time.time() - t
+
+    t = time.time()
+    print("scoring (ours)...", file=sys.stderr)
+    score_json = os.path.join(out, "scores.json")
+    sh([binary, "grid", "score", "--dir", out, "--json", score_json] + sel)
+    ours_scores = json.load(open(score_json))
+    stages["score"] = time.time() - t
+    te = {}
+    if not a.no_trackeval:
+        t = time.time()
+        print("scoring (TrackEval)...", file=sys.stderr)
+        tj = [(c, tr) for c in cells for tr in sorted(os.listdir(os.path.join(out, c, "trackers", "MOT15-train")))]
+        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+            futs = {ex.submit(trackeval, py, os.path.join(out, c), tr): (c, tr) for c, tr in tj}
+            for f in concurrent.futures.as_completed(futs):
+                te[futs[f]] = f.result()
+        stages["trackeval"] = time.time() - t
+
+    # Table.
+    rows, worst = [], {}
+    ours_cols = ["ours-online", "ours-offline", "ours-masks-online", "ours-masks-offline"]
+    summary = {"online_ge_best_hota": 0, "online_ge_sort_hota": 0, "offline_ge_best_hota_idf1": 0,
+               "masks_online_ge_best_hota": 0, "mask_cells": 0, "cells": 0}
+    by_dataset = {}
+    for c in cells:
+        name = c.replace("__", "/")
+        s = ours_scores.get(name, {})
+        for (cc, tr), v in te.items():
+            if cc == c and tr in s:
+                for k in ("HOTA", "IDF1", "MOTA"):
+                    worst[k] = max(worst.get(k, 0.0), abs(v[k] - s[tr][k]))
+                worst["IDSW"] = max(worst.get("IDSW", 0), abs(v["IDSW"] - s[tr]["IDSW"]))
+        pe = {p: s.get(p) for p in peers if s.get(p)}
+        best_peer = max(pe, key=lambda p: pe[p]["HOTA"]) if pe else None
+        bh = pe[best_peer]["HOTA"] if best_peer else 0.0
+        bi = max((v["IDF1"] for v in pe.values()), default=0.0)
+        on, off = s.get("ours-online"), s.get("ours-offline")
+        summary["cells"] += 1
+        if on and on["HOTA"] >= bh:
+            summary["online_ge_best_hota"] += 1
+        if on and on["HOTA"] >= (pe.get("rf_sort") or {"HOTA": 0})["HOTA"]:
+            summary["online_ge_sort_hota"] += 1
+        if off and off["HOTA"] >= bh and off["IDF1"] >= bi:
+            summary["offline_ge_best_hota_idf1"] += 1
+        mon = s.get("ours-masks-online")
+        if mon:
+            summary["mask_cells"] += 1
+            if mon["HOTA"] >= bh:
+                summary["masks_online_ge_best_hota"] += 1
+        ds = name.split("/")[0]
+        agg = by_dataset.setdefault(ds, {})
+        for tr, v in s.items():
+            agg.setdefault(tr, []).append(v["HOTA"])
+        rows.append((name, s, best_peer, bh))
+
+    trackers = [t for t in ours_cols + peers if any(t in r[1] for r in rows)]
+    lines = []
+    lines.append("| cell | " + " | ".join(NAMES.get(t, t) for t in trackers) + " | best peer | online − best | online − SORT |")
+    lines.append("|---" * (len(trackers) + 4) + "|")
+    for name, s, bp, bh in rows:
+        best_h = max((v["HOTA"] for v in s.values()), default=None)
+        cells_txt = [fmt_cell(s.get(t), s.get(t) is not None and s[t]["HOTA"] == best_h) for t in trackers]
+        on = s.get("ours-online")
+        d_best = f"{on['HOTA'] - bh:+.1f}" if on and bp else "–"
+        d_sort = f"{on['HOTA'] - s['rf_sort']['HOTA']:+.1f}" if on and s.get("rf_sort") else "–"
+        lines.append(f"| {name} | " + " | ".join(cells_txt) + f" | {NAMES.get(bp, bp)} | {d_best} | {d_sort} |")
+    n = max(summary["cells"], 1)
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=REPO).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True, cwd=REPO).stdout.strip()
+    cmd = "python3 scripts/grid.py" + (f" --cells {a.cells}" if a.cells else "") + (f" --datasets {a.datasets}" if a.datasets else "")
+    md = [f"# Robustness grid\n",
+          f"HOTA / IDF1 (our eval; TrackEval agrees: largest difference {json.dumps(worst) if worst else 'not run'}) per cell "
+          f"(dataset/detector model) and tracker, all on the same detections. Bold: best in the row. "
+          f"Made {now} at commit {commit}{' (with uncommitted changes)' if dirty else ''} by `{cmd}` "
+          f"({sum(stages.values()) / 60:.0f} min: " + ", ".join(f"{k} {v:.0f} s" for k, v in stages.items()) + ").\n",
+          f"- ours online ≥ best peer on HOTA: {summary['online_ge_best_hota']} / {n} cells; ≥ SORT: {summary['online_ge_sort_hota']} / {n}",
+          f"- ours offline ≥ best peer on HOTA and IDF1: {summary['offline_ge_best_hota_idf1']} / {n}",
+          f"- ours with masks online ≥ best peer on HOTA: {summary['masks_online_ge_best_hota']} / {summary['mask_cells']} mask cells\n",
+          "Mean HOTA per dataset:\n",
+          "| dataset | " + " | ".join(NAMES.get(t, t) for t in trackers) + " |",
+          "|---" * (len(trackers) + 1) + "|"]
+    for ds, agg in sorted(by_dataset.items()):
+        md.append(f"| {ds} | " + " | ".join(
+            f"{sum(agg[t]) / len(agg[t]):.1f}" if t in agg else "–" for t in trackers) + " |")
+    md += ["", *lines, ""]
+    fps = {f"{c}/{p}": v for (p, c), v in peer_fps.items()}
+    fps.update({f"{c}/{t}": v for (c, t), v in ours_fps.items()})
+    result = {"made": now, "commit": commit, "dirty": bool(dirty), "command": cmd, "stages_seconds": stages,
+              "summary": summary, "trackeval_max_difference": worst, "ours": ours_scores,
+              "trackeval": {f"{c.replace('__', '/')}/{t}": v for (c, t), v in te.items()}, "fps": fps}
+    text = "\n".join(md)
+    print(text)
+    if a.write != "-":
+        os.makedirs(a.write, exist_ok=True)
+        open(os.path.join(a.write, "grid.md"), "w").write(text)
+        json.dump(result, open(os.path.join(a.write, "grid.json"), "w"), indent=1, sort_keys=True)
+    print(f"done in {(time.time() - t_start) / 60:.1f} min", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
