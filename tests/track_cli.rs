@@ -146,3 +146,73 @@ fn mask_mode_with_frames_reads_and_writes_mots() {
         assert_eq!(r.mask, d.mask);
     }
 }
+
+#[test]
+fn scalabel_detections_in_scalabel_tracks_out() {
+    use shapetrack::io::scalabel::{parse_scalabel, to_records, Categories, IdMap};
+    let dir = scratch("cli_scalabel");
+    let out = dir.join("tracks.json");
+    let det = data("bdd100k-sample/box_track/track_predictions.json");
+    let o = track(&[
+        "--det",
+        s(&det),
+        "--fps",
+        "5",
+        "--format",
+        "scalabel",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let frames = parse_scalabel(&read_text(&out).unwrap(), "tracks.json").unwrap();
+    assert_eq!(frames.len(), 202);
+    assert!(frames
+        .iter()
+        .all(|f| f.video_name.as_deref() == Some("b1c66a42-6f7d68ca")));
+    let mut ids = IdMap::default();
+    let recs = to_records(&frames, &mut ids, &mut Categories::default(), false);
+    // Every output box is one of the detections (ids given by the tracker), categories kept.
+    let dets = parse_scalabel(&read_text(&det).unwrap(), "det").unwrap();
+    let boxes: Vec<_> = dets
+        .iter()
+        .flat_map(|f| &f.labels)
+        .filter_map(|l| l.bbox)
+        .collect();
+    assert!(recs.len() > 1000 && ids.len() > 20);
+    for r in recs.iter().take(200) {
+        assert!(boxes
+            .iter()
+            .any(|b| (b.x - r.bbox.x).abs() < 1e-6 && (b.w - r.bbox.w).abs() < 1e-6));
+    }
+    assert!(frames
+        .iter()
+        .flat_map(|f| &f.labels)
+        .all(|l| l.category.is_some() && l.score.is_some()));
+
+    // Two videos in one file: the tracker asks which one.
+    let two = dir.join("two.json");
+    std::fs::write(
+        &two,
+        r#"[{"frameIndex": 0, "videoName": "a", "labels": [{"id": "1", "score": 0.9,
+             "box2d": {"x1": 0, "y1": 0, "x2": 9, "y2": 9}}]},
+            {"frameIndex": 0, "videoName": "b", "labels": []}]"#,
+    )
+    .unwrap();
+    let o = track(&["--det", s(&two), "--out", s(&dir.join("x.txt"))]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--video"));
+    let o = track(&[
+        "--det",
+        s(&two),
+        "--video",
+        "a",
+        "--out",
+        s(&dir.join("x.txt")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, "[{\"labels\": []}]").unwrap();
+    let o = track(&["--det", s(&bad), "--out", s(&dir.join("y.txt"))]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("frameIndex"));
+}

@@ -16,14 +16,12 @@
 //!   and a real model's masks (no scores: 1.0), for mask mode without frames.
 //! - [`synthetic`]: the generator's scenes with frames, visible-part masks and visibility.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::GridError;
 use crate::io::motchallenge::{parse_mot, SeqInfo};
-use crate::io::{read_text, Record, RecordFlags, Rle};
+use crate::io::{read_text, scalabel, Record};
 use crate::synth::{Scene, SynthConfig};
-use crate::BBox;
 
 /// One sequence of a dataset.
 #[derive(Debug, Clone, PartialEq)]
@@ -142,129 +140,18 @@ pub fn sportsmot(shared: &Path) -> Result<Dataset, GridError> {
     mot_layout("sportsmot", &shared.join("data/sportsmot-train"), false, 1)
 }
 
-/// The fields of a Scalabel label the grid reads.
-struct Label {
-    id: String,
-    score: Option<f64>,
-    bbox: Option<BBox>,
-    rle: Option<Rle>,
-    crowd: bool,
-}
-
-/// Frames (`frameIndex`) and labels of a Scalabel JSON file: the few fields the grid needs.
-fn read_scalabel(path: &Path) -> Result<Vec<(u32, Vec<Label>)>, GridError> {
-    let file = path.display().to_string();
-    let bad = |message: String| GridError::Data {
-        file: file.clone(),
-        message,
-    };
-    let text = read_text(path).map_err(io)?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
-    let frames = match &v {
-        serde_json::Value::Array(a) => a,
-        serde_json::Value::Object(o) => o
-            .get("frames")
-            .and_then(|f| f.as_array())
-            .ok_or_else(|| bad("no frame list".into()))?,
-        _ => return Err(bad("not a list of frames".into())),
-    };
-    let mut out = Vec::with_capacity(frames.len());
-    for f in frames {
-        let index = f
-            .get("frameIndex")
-            .and_then(|i| i.as_u64())
-            .ok_or_else(|| bad("a frame without frameIndex".into()))?;
-        let mut labels = Vec::new();
-        for l in f
-            .get("labels")
-            .and_then(|l| l.as_array())
-            .into_iter()
-            .flatten()
-        {
-            let id = match l.get("id") {
-                Some(serde_json::Value::String(s)) => s.clone(),
-                Some(serde_json::Value::Number(n)) => n.to_string(),
-                _ => return Err(bad(format!("frame {index}: a label without id"))),
-            };
-            let bbox = match l.get("box2d").filter(|b| !b.is_null()) {
-                Some(b) => {
-                    let g = |k: &str| b.get(k).and_then(|x| x.as_f64());
-                    match (g("x1"), g("y1"), g("x2"), g("y2")) {
-                        // Scalabel's box2d includes its last pixel: width = x2 − x1 + 1
-                        // (scalabel/label/transforms.py, `box2d_to_bbox`).
-                        (Some(x1), Some(y1), Some(x2), Some(y2)) if x2 >= x1 && y2 >= y1 => {
-                            Some(BBox::new(x1, y1, x2 - x1 + 1.0, y2 - y1 + 1.0))
-                        }
-                        _ => return Err(bad(format!("frame {index}: bad box2d {b}"))),
-                    }
-                }
-                None => None,
-            };
-            let rle = match l.get("rle").filter(|r| !r.is_null()) {
-                Some(r) => {
-                    let counts = r.get("counts").and_then(|c| c.as_str());
-                    let size = r.get("size").and_then(|s| s.as_array());
-                    let (Some(counts), Some(size)) = (counts, size) else {
-                        return Err(bad(format!("frame {index}: bad rle")));
-                    };
-                    let dim = |i: usize| size.get(i).and_then(|x| x.as_u64()).unwrap_or(0) as u32;
-                    Some(
-                        Rle::from_compressed(counts, dim(0), dim(1))
-                            .map_err(|e| bad(format!("frame {index}: {e}")))?,
-                    )
-                }
-                None => None,
-            };
-            let crowd = l
-                .get("attributes")
-                .and_then(|a| a.get("crowd"))
-                .and_then(|c| c.as_bool())
-                .unwrap_or(false);
-            labels.push(Label {
-                id,
-                score: l.get("score").and_then(|s| s.as_f64()),
-                bbox,
-                rle,
-                crowd,
-            });
-        }
-        out.push((index as u32, labels));
-    }
-    Ok(out)
-}
-
-/// Records of a Scalabel file: string ids numbered from 1 in order of first appearance
-/// (`as_detections`: id −1), crowd labels left out, frames 1-based.
+/// Records of a Scalabel file, crowd labels left out, classes pooled (the peers are
+/// class-agnostic); as detections (`as_detections`) their ids are −1.
 fn scalabel_records(path: &Path, as_detections: bool) -> Result<Vec<Record>, GridError> {
-    let mut ids: BTreeMap<String, i64> = BTreeMap::new();
-    let mut out = Vec::new();
-    for (index, labels) in read_scalabel(path)? {
-        for l in labels {
-            if l.crowd {
-                continue;
-            }
-            let bbox = match (&l.rle, l.bbox) {
-                (Some(r), _) => r.to_mask().bbox(),
-                (None, Some(b)) => b,
-                (None, None) => continue,
-            };
-            let next = ids.len() as i64 + 1;
-            let id = if as_detections {
-                -1
-            } else {
-                *ids.entry(l.id).or_insert(next)
-            };
-            out.push(Record {
-                frame: index + 1,
-                id,
-                bbox,
-                score: l.score.unwrap_or(1.0),
-                class: -1,
-                visibility: -1.0,
-                mask: l.rle,
-                flags: RecordFlags::default(),
-            });
+    let text = read_text(path).map_err(io)?;
+    let frames = scalabel::parse_scalabel(&text, &path.display().to_string()).map_err(io)?;
+    let mut ids = scalabel::IdMap::default();
+    let mut categories = scalabel::Categories::default();
+    let mut out = scalabel::to_records(&frames, &mut ids, &mut categories, true);
+    for r in &mut out {
+        r.class = -1;
+        if as_detections {
+            r.id = -1;
         }
     }
     Ok(out)

@@ -1,5 +1,6 @@
 //! File formats in and out: MOTChallenge txt, MOTS txt (COCO RLE), 16-bit PNG instance masks,
-//! COCO-video / YouTube-VIS JSON, CVAT-for-video XML, VOT `groundtruth.txt`.
+//! COCO-video / YouTube-VIS JSON, CVAT-for-video XML, VOT `groundtruth.txt`, Scalabel JSON
+//! (BDD100K).
 //!
 //! Every reader turns text into [`Record`]s (one object in one frame) and reports problems as an
 //! [`IoError`] naming the file, the line (1-based), the column (1-based field or character) and
@@ -12,6 +13,7 @@ pub mod layout;
 pub mod motchallenge;
 pub mod png_masks;
 pub mod rle;
+pub mod scalabel;
 pub mod vot;
 
 use crate::frame::{BBox, Mask, TrackedShape};

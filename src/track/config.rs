@@ -195,6 +195,17 @@ pub struct Config {
     /// Default 5: with `report_tentative` a longer wait costs no recall, only latency, and it
     /// filters out short-lived false positives.
     pub min_hits: u32,
+    /// Confirmation by accumulated evidence instead of a birth threshold: any unmatched high
+    /// detection may start a tentative track, each match adds 1 to its evidence when the
+    /// detection scores at least the birth threshold and this weight when it scores less, and
+    /// the track is confirmed once its evidence reaches [`Config::confirm_hits`]. A persistent
+    /// object whose detector scores it low is confirmed after `1/weight` times as many
+    /// matches; clutter that does not persist never is. `None`: births need the birth
+    /// threshold and every match counts 1.
+    pub birth_evidence: Option<f64>,
+    /// Fewest matches confirmation needs however low the frame rate (see
+    /// [`Config::confirm_hits`]). Default: `u32::MAX`, i.e. `min_hits` is not scaled.
+    pub min_hits_floor: u32,
     /// Frames a tentative track may go unmatched before it is dropped. Default 0: its first
     /// miss (ByteTrack).
     pub max_tentative_misses: u32,
@@ -322,6 +333,8 @@ impl Default for Config {
             score_adaptation: None,
             spawn_max_iou: 1.0,
             min_hits: 5,
+            min_hits_floor: u32::MAX,
+            birth_evidence: None,
             max_tentative_misses: 0,
             max_lost: 15,
             report_tentative: true,
@@ -499,6 +512,14 @@ impl Config {
                 check(&format!("terms.{name}.gate"), g, true, "must be finite")?;
             }
         }
+        if let Some(w) = self.birth_evidence {
+            check(
+                "birth_evidence",
+                w,
+                w > 0.0 && w <= 1.0,
+                "must be in (0, 1]",
+            )?;
+        }
         if let Some(a) = &self.coasting {
             a.validate()
                 .map_err(|(field, value, reason)| TrackError::InvalidConfig {
@@ -536,6 +557,15 @@ impl Config {
             }
             _ => frames,
         }
+    }
+
+    /// Matches a tentative track needs to be confirmed at the video's frame rate:
+    /// [`Config::min_hits`] scaled like the other frame counts, at least
+    /// [`Config::min_hits_floor`] (and never more than `min_hits`).
+    pub fn confirm_hits(&self) -> u32 {
+        self.frames(self.min_hits)
+            .max(self.min_hits_floor)
+            .min(self.min_hits.max(1))
     }
 
     /// The appearance parts the enabled terms read (the tracker computes only those).

@@ -93,6 +93,8 @@ pub struct Track {
     reference: Option<Arc<Appearance>>,
     /// Frames matched, in total.
     hits: u32,
+    /// Evidence for confirmation (see [`Config::birth_evidence`]): matches weighted by score.
+    evidence: f64,
     /// Consecutive frames without a match (0 when matched this or the previous frame).
     misses: u32,
     /// Frame of the last match (tracker frame numbers, 1-based).
@@ -239,6 +241,7 @@ impl Track {
             snapshot: snapshot.then(|| motion.clone_box()),
             motion,
             hits: 1,
+            evidence: 0.0,
             misses: 0,
             last_frame: frame,
             last: det.clone(),
@@ -304,8 +307,10 @@ impl Track {
         // matching it keeps the track alive, but the filter coasts on its prediction rather
         // than having its velocity dragged by the occluder's edge. Not after a gap, when the
         // prediction has drifted and the sliver is the only news.
-        let sliver =
-            amodal && ratio < cfg.sliver_ratio && self.misses == 0 && self.hits >= cfg.min_hits;
+        let sliver = amodal
+            && ratio < cfg.sliver_ratio
+            && self.misses == 0
+            && self.hits >= cfg.confirm_hits();
         if !sliver {
             self.motion.update(&z)?;
         }
@@ -338,6 +343,12 @@ impl Track {
             self.reference = Some(a.clone());
         }
         self.appearance = Some(a);
+    }
+
+    /// Adds `w` to the track's evidence for confirmation; returns the total.
+    pub(crate) fn add_evidence(&mut self, w: f64) -> f64 {
+        self.evidence += w;
+        self.evidence
     }
 
     /// A tentative track gets its id and is confirmed.

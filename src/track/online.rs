@@ -520,7 +520,7 @@ impl Tracker {
         dets: &[Prepared<'_>],
         out: &mut Vec<TrackedShape>,
     ) -> Result<Vec<bool>, TrackError> {
-        let (frame, min_hits) = (self.frame, self.config.min_hits);
+        let (frame, min_hits) = (self.frame, self.config.confirm_hits());
         let report = self.config.report_tentative;
         let mut matched = vec![false; self.tracks.len()];
         let mut confirming = Vec::new();
@@ -534,8 +534,20 @@ impl Tracker {
                 self.gaps.closed(t.misses());
             }
             t.hit(&d.det, &d.features, frame, &self.config)?;
+            let enough = match self.config.birth_evidence {
+                Some(low) => {
+                    let w = if d.det.score >= self.thresholds.birth {
+                        1.0
+                    } else {
+                        low
+                    };
+                    // Matches weigh by score; a tiny tolerance absorbs float sums like 10 × 0.1.
+                    t.add_evidence(w) + 1e-9 >= min_hits as f64
+                }
+                None => t.hits() >= min_hits,
+            };
             match t.state() {
-                TrackState::Tentative if t.hits() >= min_hits => confirming.push(*m),
+                TrackState::Tentative if enough => confirming.push(*m),
                 TrackState::Tentative => {
                     if report {
                         t.hold(shape_of(frame, 0, TrackState::Tentative, d, m.cost));
@@ -730,9 +742,10 @@ impl Tracker {
                     .any(|(o, &used)| used && o.det.bbox.iou(&d.det.bbox) > max_iou)
         };
         for (j, d) in dets.iter().enumerate() {
+            let weak = d.det.score < self.thresholds.birth;
             if det_used.get(j).copied().unwrap_or(true)
                 || !d.high
-                || d.det.score < self.thresholds.birth
+                || (weak && self.config.birth_evidence.is_none())
                 || duplicate(d)
             {
                 continue;
@@ -754,7 +767,11 @@ impl Tracker {
                 self.frame,
                 snapshot,
             );
-            if self.config.min_hits <= 1 {
+            let evidence = match self.config.birth_evidence {
+                Some(low) => t.add_evidence(if weak { low } else { 1.0 }),
+                None => 1.0,
+            };
+            if evidence + 1e-9 >= self.config.confirm_hits() as f64 {
                 let id = self.new_id();
                 t.confirm(id);
                 out.push(shape_of(self.frame, id, TrackState::Confirmed, d, 0.0));

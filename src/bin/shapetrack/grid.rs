@@ -19,7 +19,8 @@
 
 use shapetrack::eval::{MotResults, Summary};
 use shapetrack::grid::{self, Cell, CellData, Dataset, Input, Mode, Tracking};
-use shapetrack::io::motchallenge::{parse_mot, write_mot};
+use shapetrack::io::layout::parse_mot_as_trackeval;
+use shapetrack::io::motchallenge::write_mot;
 use shapetrack::io::{read_text, write_text, Record};
 use shapetrack::track::offline::OfflineConfig;
 use shapetrack::track::Config;
@@ -426,7 +427,7 @@ fn score(args: ScoreArgs) -> crate::CliResult {
                     .join("data")
                     .join(format!("{}.txt", seq.name));
                 let recs = if p.is_file() {
-                    parse_mot(&read_text(&p)?, &p.display().to_string())?
+                    parse_mot_as_trackeval(&read_text(&p)?, &p.display().to_string())?
                 } else {
                     Vec::new()
                 };

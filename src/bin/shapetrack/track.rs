@@ -13,6 +13,7 @@ use shapetrack::frame::{Frame, Mask, TrackedShape};
 use shapetrack::io::coco_video::{write_coco_video, Category, VideoInfo};
 use shapetrack::io::cvat::{write_cvat, CvatMeta};
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mot, write_mots, SeqInfo};
+use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, write_scalabel, Categories};
 use shapetrack::io::{read_text, write_text, IoError, Record};
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase};
 use shapetrack::track::{detections_by_frame, to_records, Config, Tracker};
@@ -33,6 +34,8 @@ pub enum Preset {
 /// Output file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
+    /// Scalabel JSON (BDD100K): a list of frames with labels (ids as strings, scores kept).
+    Scalabel,
     /// MOTChallenge txt: `frame,id,x,y,w,h,conf,-1,-1,-1`.
     Mot,
     /// MOTS txt: `frame id class height width rle`.
@@ -46,9 +49,13 @@ pub enum Format {
 /// Arguments of `shapetrack track`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Detections: MOTChallenge det.txt (boxes) or MOTS txt (masks).
+    /// Detections: MOTChallenge det.txt (boxes), MOTS txt (masks) or Scalabel JSON (boxes or
+    /// RLE masks with scores, e.g. BDD100K predictions), told apart by content.
     #[arg(long)]
     pub det: PathBuf,
+    /// With Scalabel detections holding several videos: the one to track.
+    #[arg(long)]
+    pub video: Option<String>,
     /// Image folder (MOTChallenge `img1/`), for appearance features; optional in box mode.
     #[arg(long)]
     pub frames: Option<PathBuf>,
@@ -95,6 +102,45 @@ fn is_mots(text: &str) -> bool {
     !line.contains(',') && f.len() == 6 && f[5].parse::<f64>().is_err()
 }
 
+/// Whether a detection file is JSON (Scalabel): its first non-blank character opens a list or
+/// an object.
+fn is_json(text: &str) -> bool {
+    matches!(text.trim_start().chars().next(), Some('[' | '{'))
+}
+
+/// The detections of one video of a Scalabel file (`video`, or the file's only one), its name
+/// and the category table its classes refer to.
+fn scalabel_detections(
+    text: &str,
+    file: &str,
+    video: Option<&str>,
+) -> Result<(String, Vec<Record>, Categories), Box<dyn std::error::Error>> {
+    let mut videos = split_videos(parse_scalabel(text, file)?);
+    let name = match video {
+        Some(v) => v.to_string(),
+        None if videos.len() == 1 => videos.keys().next().cloned().unwrap_or_default(),
+        None => {
+            let names: Vec<&String> = videos.keys().collect();
+            return Err(format!(
+                "{file} holds {} videos ({names:?}): choose one with --video",
+                videos.len()
+            )
+            .into());
+        }
+    };
+    let frames = videos
+        .remove(&name)
+        .ok_or_else(|| format!("{file}: no video named {name:?}"))?;
+    let mut cats = Categories::default();
+    let mut records =
+        scalabel::to_records(&frames, &mut scalabel::IdMap::default(), &mut cats, false);
+    // Detections carry no identity; the tracker gives them one.
+    for r in &mut records {
+        r.id = -1;
+    }
+    Ok((name, records, cats))
+}
+
 /// The image files of a folder, sorted by name (MOTChallenge names them by frame number).
 fn list_images(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
     let rd = std::fs::read_dir(dir).map_err(|source| IoError::Io {
@@ -126,7 +172,13 @@ fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
 pub fn run(args: Args) -> crate::CliResult {
     let det_name = args.det.display().to_string();
     let text = read_text(&args.det)?;
-    let mots = is_mots(&text);
+    let scalabel_input = is_json(&text);
+    // Scalabel masks are tracked like MOTS masks.
+    let mots = if scalabel_input {
+        text.contains("\"rle\"") && text.contains("\"counts\"")
+    } else {
+        is_mots(&text)
+    };
     // Masks get the mask preset (appearance, amodal completion, re-identification by colour
     // and SIFT when frames are given); a JSON config fills its missing fields from it too.
     let preset = args
@@ -161,7 +213,12 @@ pub fn run(args: Args) -> crate::CliResult {
             ..from_file
         };
     }
-    let records = if mots {
+    let mut scalabel_video: Option<(String, Categories)> = None;
+    let records = if scalabel_input {
+        let (video, recs, cats) = scalabel_detections(&text, &det_name, args.video.as_deref())?;
+        scalabel_video = Some((video, cats));
+        recs
+    } else if mots {
         parse_mots(&text, &det_name)?
     } else {
         parse_mot(&text, &det_name)?
@@ -295,6 +352,18 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         Format::Coco => coco(&out_records, num_frames, image_size)?,
         Format::Cvat => cvat(&out_records, num_frames, image_size, &args.det)?,
+        Format::Scalabel => {
+            let (video, cats) = scalabel_video
+                .clone()
+                .unwrap_or_else(|| (task_name(&args.det), Categories::default()));
+            write_scalabel(&scalabel::from_records(
+                &out_records,
+                &video,
+                num_frames,
+                None,
+                &cats,
+            ))?
+        }
     };
     write_text(&args.out, &body)?;
 

@@ -1,0 +1,524 @@
+//! Scalabel JSON, the format of BDD100K's tracking labels and of trackers evaluated on it: a
+//! list of frames `{name, videoName, frameIndex, labels: [{id, category, attributes, score?,
+//! box2d: {x1, y1, x2, y2} | rle: {counts, size: [h, w]} | poly2d …}]}`, or Scalabel's dataset
+//! form `{"frames": [...], "config": …}`.
+//!
+//! - [`parse_scalabel`] reads a file into [`ScalabelFrame`]s. Every field the reader does not
+//!   model is kept (including `null`s), so [`write_scalabel`] writes a file read unchanged
+//!   back as the same JSON.
+//! - [`to_records`] turns frames into the house [`Record`]s: frame = `frameIndex + 1` (records
+//!   are 1-based), string ids → dense integers per video in order of first appearance (the
+//!   [`IdMap`] restores them), categories → class integers ([`Categories`], BDD100K's MOT list
+//!   first), `score` (absent: 1), `attributes.occluded` → [`RecordFlags::occluded`]; labels
+//!   flagged `crowd` can be left out (BDD100K's evaluation ignores them).
+//! - [`from_records`] writes records (a tracker's output) as frames of one video.
+//!
+//! **Boxes.** Scalabel's `box2d` includes its last pixel: width = `x2 − x1 + 1` (Scalabel's own
+//! `box2d_to_bbox` in `scalabel/label/transforms.py`), so a box `(x, y, w, h)` is written as
+//! `x2 = x + w − 1`. A label with an `rle` mask gets the mask's tight box.
+//!
+//! **Errors** carry the line and column of the offending value: malformed JSON, a frame without
+//! an integer `frameIndex`, a label without an `id` (string or integer), a `box2d` with a
+//! missing or non-finite coordinate or `x2 < x1 − 1`, a malformed RLE or one whose size
+//! disagrees with the other masks of the file, two labels with one id in a frame.
+
+use std::collections::BTreeMap;
+
+use serde_json::value::RawValue;
+use serde_json::{Map, Value};
+
+use super::{line_col, IoError, Record, RecordFlags, Rle};
+use crate::frame::BBox;
+
+/// BDD100K's MOT categories, numbered from 1 as its evaluation does.
+pub const BDD_CATEGORIES: [&str; 8] = [
+    "pedestrian",
+    "rider",
+    "car",
+    "truck",
+    "bus",
+    "train",
+    "motorcycle",
+    "bicycle",
+];
+
+/// One labelled object in one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScalabelLabel {
+    /// Track id (integers in the file are read as their decimal text).
+    pub id: String,
+    /// Category name.
+    pub category: Option<String>,
+    /// Confidence, when the label is a prediction.
+    pub score: Option<f64>,
+    /// Box (`box2d` converted, inclusive end), or the mask's tight box.
+    pub bbox: Option<BBox>,
+    /// Instance mask.
+    pub rle: Option<Rle>,
+    /// `attributes.occluded`.
+    pub occluded: bool,
+    /// `attributes.crowd`: a group of objects, not one (evaluation ignores it).
+    pub crowd: bool,
+    /// Every field of the label object as read; [`write_scalabel`] writes it unchanged.
+    /// Empty for labels made by [`from_records`].
+    pub raw: Map<String, Value>,
+}
+
+/// One frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScalabelFrame {
+    /// Image name.
+    pub name: Option<String>,
+    /// Video name.
+    pub video_name: Option<String>,
+    /// 0-based frame index within the video.
+    pub frame_index: u32,
+    /// Labels.
+    pub labels: Vec<ScalabelLabel>,
+    /// Every other field of the frame object as read (without `labels`).
+    pub raw: Map<String, Value>,
+}
+
+/// Track ids of one video: the file's strings ↔ the records' integers (1, 2, …).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct IdMap {
+    to_int: BTreeMap<String, i64>,
+    to_str: Vec<String>,
+}
+
+impl IdMap {
+    /// The integer of `s`, given in order of first appearance.
+    pub fn intern(&mut self, s: &str) -> i64 {
+        if let Some(&i) = self.to_int.get(s) {
+            return i;
+        }
+        self.to_str.push(s.to_string());
+        let i = self.to_str.len() as i64;
+        self.to_int.insert(s.to_string(), i);
+        i
+    }
+
+    /// The string of integer id `i` (`None` for ids this map did not give).
+    pub fn name(&self, i: i64) -> Option<&str> {
+        usize::try_from(i - 1)
+            .ok()
+            .and_then(|k| self.to_str.get(k))
+            .map(String::as_str)
+    }
+
+    /// Number of ids.
+    pub fn len(&self) -> usize {
+        self.to_str.len()
+    }
+
+    /// Whether no id was given.
+    pub fn is_empty(&self) -> bool {
+        self.to_str.is_empty()
+    }
+}
+
+/// Category names ↔ class integers: BDD100K's MOT categories as 1–8, other names numbered on
+/// from 9 in order of first appearance; no category is class −1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Categories {
+    names: Vec<String>,
+}
+
+impl Default for Categories {
+    fn default() -> Self {
+        Self {
+            names: BDD_CATEGORIES.iter().map(|s| s.to_string()).collect(),
+        }
+    }
+}
+
+impl Categories {
+    /// The class of `name`, adding it when new.
+    pub fn class(&mut self, name: Option<&str>) -> i32 {
+        let Some(name) = name else {
+            return -1;
+        };
+        match self.names.iter().position(|n| n == name) {
+            Some(k) => k as i32 + 1,
+            None => {
+                self.names.push(name.to_string());
+                self.names.len() as i32
+            }
+        }
+    }
+
+    /// The name of class `c` (`None` for −1 and unknown classes).
+    pub fn name(&self, c: i32) -> Option<&str> {
+        usize::try_from(c - 1)
+            .ok()
+            .and_then(|k| self.names.get(k))
+            .map(String::as_str)
+    }
+}
+
+/// Where raw JSON values live in the source text, for error positions.
+struct Ctx<'t> {
+    file: &'t str,
+    text: &'t str,
+}
+
+impl Ctx<'_> {
+    fn err_at(&self, raw: &RawValue, message: impl Into<String>) -> IoError {
+        let offset = (raw.get().as_ptr() as usize).wrapping_sub(self.text.as_ptr() as usize);
+        let (line, column) = line_col(self.text, offset);
+        IoError::Json {
+            file: self.file.to_string(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+}
+
+fn json_err(file: &str, e: serde_json::Error) -> IoError {
+    IoError::Json {
+        file: file.to_string(),
+        line: e.line().max(1),
+        column: e.column().max(1),
+        message: e
+            .to_string()
+            .split(" at line ")
+            .next()
+            .unwrap_or("")
+            .to_string(),
+    }
+}
+
+/// Reads a Scalabel file (a list of frames, or `{"frames": [...]}`).
+pub fn parse_scalabel(text: &str, file: &str) -> Result<Vec<ScalabelFrame>, IoError> {
+    let ctx = Ctx { file, text };
+    let top: &RawValue = serde_json::from_str(text).map_err(|e| json_err(file, e))?;
+    let frames: Vec<&RawValue> = match serde_json::from_str::<Vec<&RawValue>>(top.get()) {
+        Ok(v) => v,
+        Err(_) => {
+            let obj: BTreeMap<String, &RawValue> = serde_json::from_str(top.get())
+                .map_err(|_| ctx.err_at(top, "expected a list of frames or {\"frames\": [...]}"))?;
+            let f = obj
+                .get("frames")
+                .ok_or_else(|| ctx.err_at(top, "no \"frames\" list"))?;
+            serde_json::from_str(f.get()).map_err(|_| ctx.err_at(f, "\"frames\" is not a list"))?
+        }
+    };
+    let mut size: Option<(u32, u32)> = None;
+    frames
+        .iter()
+        .map(|raw| frame_from_raw(&ctx, raw, &mut size))
+        .collect()
+}
+
+fn frame_from_raw(
+    ctx: &Ctx<'_>,
+    raw: &RawValue,
+    size: &mut Option<(u32, u32)>,
+) -> Result<ScalabelFrame, IoError> {
+    let obj: BTreeMap<String, &RawValue> =
+        serde_json::from_str(raw.get()).map_err(|_| ctx.err_at(raw, "a frame is not an object"))?;
+    let frame_index = match obj.get("frameIndex") {
+        Some(v) => serde_json::from_str::<u32>(v.get())
+            .map_err(|_| ctx.err_at(v, "frameIndex must be an integer ≥ 0"))?,
+        None => return Err(ctx.err_at(raw, "a frame without frameIndex")),
+    };
+    let text_of = |k: &str| -> Option<String> {
+        obj.get(k).and_then(|v| {
+            serde_json::from_str::<Option<String>>(v.get())
+                .ok()
+                .flatten()
+        })
+    };
+    let mut labels = Vec::new();
+    if let Some(l) = obj.get("labels") {
+        let list: Option<Vec<&RawValue>> =
+            serde_json::from_str(l.get()).map_err(|_| ctx.err_at(l, "labels is not a list"))?;
+        let mut seen = std::collections::BTreeSet::new();
+        for lr in list.unwrap_or_default() {
+            let label = label_from_raw(ctx, lr, size)?;
+            if !seen.insert(label.id.clone()) {
+                return Err(ctx.err_at(
+                    lr,
+                    format!("two labels with id {:?} in frame {frame_index}", label.id),
+                ));
+            }
+            labels.push(label);
+        }
+    }
+    let mut all: Map<String, Value> =
+        serde_json::from_str(raw.get()).map_err(|e| json_err(ctx.file, e))?;
+    // A list of labels lives in `labels`; `raw` keeps an empty list in its place, or the
+    // original `null`, or nothing when the file had no `labels`, so the writer can tell.
+    if let Some(Value::Array(_)) = all.get("labels") {
+        all.insert("labels".into(), Value::Array(Vec::new()));
+    }
+    Ok(ScalabelFrame {
+        name: text_of("name"),
+        video_name: text_of("videoName"),
+        frame_index,
+        labels,
+        raw: all,
+    })
+}
+
+fn label_from_raw(
+    ctx: &Ctx<'_>,
+    raw: &RawValue,
+    size: &mut Option<(u32, u32)>,
+) -> Result<ScalabelLabel, IoError> {
+    let obj: BTreeMap<String, &RawValue> =
+        serde_json::from_str(raw.get()).map_err(|_| ctx.err_at(raw, "a label is not an object"))?;
+    let id = match obj
+        .get("id")
+        .map(|v| serde_json::from_str::<Value>(v.get()))
+    {
+        Some(Ok(Value::String(s))) => s,
+        Some(Ok(Value::Number(n))) => n.to_string(),
+        _ => return Err(ctx.err_at(raw, "a label without an id (string or integer)")),
+    };
+    let nullable = |k: &str| obj.get(k).filter(|v| v.get() != "null");
+    let category = match nullable("category") {
+        Some(v) => Some(
+            serde_json::from_str::<String>(v.get())
+                .map_err(|_| ctx.err_at(v, "category must be a string"))?,
+        ),
+        None => None,
+    };
+    let score = match nullable("score") {
+        Some(v) => {
+            let s: f64 = serde_json::from_str(v.get())
+                .map_err(|_| ctx.err_at(v, "score must be a number"))?;
+            Some(s)
+        }
+        None => None,
+    };
+    let bbox = match nullable("box2d") {
+        Some(v) => {
+            let b: BTreeMap<String, Value> = serde_json::from_str(v.get())
+                .map_err(|_| ctx.err_at(v, "box2d must be an object"))?;
+            let coord = |k: &str| -> Result<f64, IoError> {
+                b.get(k)
+                    .and_then(Value::as_f64)
+                    .filter(|x| x.is_finite() && x.abs() <= 1e9)
+                    .ok_or_else(|| ctx.err_at(v, format!("box2d.{k} must be a finite number")))
+            };
+            let (x1, y1, x2, y2) = (coord("x1")?, coord("y1")?, coord("x2")?, coord("y2")?);
+            // Inclusive ends: a one-pixel box has x2 = x1; anything narrower is wrong.
+            if x2 < x1 - 1.0 || y2 < y1 - 1.0 {
+                return Err(ctx.err_at(v, format!("box2d has x2 < x1 or y2 < y1: {b:?}")));
+            }
+            Some(BBox::new(x1, y1, x2 - x1 + 1.0, y2 - y1 + 1.0))
+        }
+        None => None,
+    };
+    let rle = match nullable("rle") {
+        Some(v) => {
+            #[derive(serde::Deserialize)]
+            struct RleJson {
+                counts: String,
+                size: [u32; 2],
+            }
+            let r: RleJson = serde_json::from_str(v.get())
+                .map_err(|_| ctx.err_at(v, "rle must be {counts: string, size: [h, w]}"))?;
+            let [h, w] = r.size;
+            if size.is_some_and(|s| s != (h, w)) {
+                return Err(ctx.err_at(
+                    v,
+                    format!("rle size {h}x{w} differs from the file's other masks {size:?}"),
+                ));
+            }
+            *size = Some((h, w));
+            let (line, _) = {
+                let offset = (v.get().as_ptr() as usize).wrapping_sub(ctx.text.as_ptr() as usize);
+                line_col(ctx.text, offset)
+            };
+            Some(
+                Rle::from_compressed(&r.counts, h, w).map_err(|source| IoError::Rle {
+                    file: ctx.file.to_string(),
+                    line,
+                    source,
+                })?,
+            )
+        }
+        None => None,
+    };
+    let attr = |k: &str| -> bool {
+        obj.get("attributes")
+            .and_then(|a| serde_json::from_str::<Map<String, Value>>(a.get()).ok())
+            .and_then(|a| a.get(k).and_then(Value::as_bool))
+            .unwrap_or(false)
+    };
+    let all: Map<String, Value> =
+        serde_json::from_str(raw.get()).map_err(|e| json_err(ctx.file, e))?;
+    let bbox = match (&rle, bbox) {
+        (Some(r), None) if r.area() > 0 => Some(r.to_mask().bbox()),
+        (_, b) => b,
+    };
+    Ok(ScalabelLabel {
+        id,
+        category,
+        score,
+        bbox,
+        rle,
+        occluded: attr("occluded"),
+        crowd: attr("crowd"),
+        raw: all,
+    })
+}
+
+/// Writes frames as a Scalabel JSON list (labels read from a file are written as read).
+pub fn write_scalabel(frames: &[ScalabelFrame]) -> Result<String, IoError> {
+    let list: Vec<Value> = frames.iter().map(frame_json).collect();
+    serde_json::to_string(&list).map_err(|e| IoError::Invalid {
+        file: "scalabel".into(),
+        line: 0,
+        message: e.to_string(),
+    })
+}
+
+fn frame_json(f: &ScalabelFrame) -> Value {
+    let mut m = f.raw.clone();
+    if let Some(n) = &f.name {
+        m.insert("name".into(), Value::String(n.clone()));
+    }
+    if let Some(v) = &f.video_name {
+        m.insert("videoName".into(), Value::String(v.clone()));
+    }
+    m.insert("frameIndex".into(), Value::from(f.frame_index));
+    // Keep a file's `labels: null` or missing `labels` when the frame has none.
+    let keep = f.labels.is_empty() && !matches!(m.get("labels"), Some(Value::Array(_)));
+    if !keep {
+        m.insert(
+            "labels".into(),
+            Value::Array(f.labels.iter().map(label_json).collect()),
+        );
+    }
+    Value::Object(m)
+}
+
+fn label_json(l: &ScalabelLabel) -> Value {
+    if !l.raw.is_empty() {
+        return Value::Object(l.raw.clone());
+    }
+    let mut m = Map::new();
+    m.insert("id".into(), Value::String(l.id.clone()));
+    if let Some(c) = &l.category {
+        m.insert("category".into(), Value::String(c.clone()));
+    }
+    if let Some(s) = l.score {
+        m.insert("score".into(), Value::from(s));
+    }
+    let mut attrs = Map::new();
+    attrs.insert("occluded".into(), Value::Bool(l.occluded));
+    attrs.insert("crowd".into(), Value::Bool(l.crowd));
+    m.insert("attributes".into(), Value::Object(attrs));
+    match (&l.rle, l.bbox) {
+        (Some(r), _) => {
+            let mut rm = Map::new();
+            rm.insert("counts".into(), Value::String(r.to_compressed()));
+            rm.insert("size".into(), Value::from(vec![r.height, r.width]));
+            m.insert("rle".into(), Value::Object(rm));
+        }
+        (None, Some(b)) => {
+            let mut bm = Map::new();
+            bm.insert("x1".into(), Value::from(b.x));
+            bm.insert("y1".into(), Value::from(b.y));
+            bm.insert("x2".into(), Value::from(b.x + b.w - 1.0));
+            bm.insert("y2".into(), Value::from(b.y + b.h - 1.0));
+            m.insert("box2d".into(), Value::Object(bm));
+        }
+        (None, None) => {}
+    }
+    Value::Object(m)
+}
+
+/// The frames of each video (by `videoName`; frames without one under `""`), in file order.
+pub fn split_videos(frames: Vec<ScalabelFrame>) -> BTreeMap<String, Vec<ScalabelFrame>> {
+    let mut out: BTreeMap<String, Vec<ScalabelFrame>> = BTreeMap::new();
+    for f in frames {
+        out.entry(f.video_name.clone().unwrap_or_default())
+            .or_default()
+            .push(f);
+    }
+    out
+}
+
+/// The records of one video's frames (see the module docs); labels without a box or mask
+/// (tags) and, with `skip_crowd`, crowd labels are left out. `ids` and `categories` are
+/// extended with what the frames name.
+pub fn to_records(
+    frames: &[ScalabelFrame],
+    ids: &mut IdMap,
+    categories: &mut Categories,
+    skip_crowd: bool,
+) -> Vec<Record> {
+    let mut out = Vec::new();
+    for f in frames {
+        for l in &f.labels {
+            let Some(bbox) = l.bbox else {
+                continue;
+            };
+            if skip_crowd && l.crowd {
+                continue;
+            }
+            out.push(Record {
+                frame: f.frame_index + 1,
+                id: ids.intern(&l.id),
+                bbox,
+                score: l.score.unwrap_or(1.0),
+                class: categories.class(l.category.as_deref()),
+                visibility: -1.0,
+                mask: l.rle.clone(),
+                flags: RecordFlags {
+                    interpolated: false,
+                    occluded: l.occluded,
+                },
+            });
+        }
+    }
+    out
+}
+
+/// Frames `1..=num_frames` of video `video` holding `records` (a tracker's output): image names
+/// `<video>-<frame:07>.jpg` (BDD100K's), ids written as `ids` names them (else as integers),
+/// classes as `categories` names them, scores kept, masks as RLE.
+pub fn from_records(
+    records: &[Record],
+    video: &str,
+    num_frames: u32,
+    ids: Option<&IdMap>,
+    categories: &Categories,
+) -> Vec<ScalabelFrame> {
+    let n = num_frames.max(records.iter().map(|r| r.frame).max().unwrap_or(0));
+    let mut frames: Vec<ScalabelFrame> = (1..=n)
+        .map(|f| ScalabelFrame {
+            name: Some(format!("{video}-{f:07}.jpg")),
+            video_name: Some(video.to_string()),
+            frame_index: f - 1,
+            labels: Vec::new(),
+            raw: Map::from_iter([("labels".to_string(), Value::Array(Vec::new()))]),
+        })
+        .collect();
+    let mut sorted: Vec<&Record> = records.iter().filter(|r| r.frame >= 1).collect();
+    sorted.sort_by_key(|r| (r.frame, r.id));
+    for r in sorted {
+        let Some(f) = frames.get_mut(r.frame as usize - 1) else {
+            continue;
+        };
+        let id = ids
+            .and_then(|m| m.name(r.id))
+            .map_or_else(|| r.id.to_string(), str::to_string);
+        f.labels.push(ScalabelLabel {
+            id,
+            category: categories.name(r.class).map(str::to_string),
+            score: Some(r.score),
+            bbox: Some(r.bbox),
+            rle: r.mask.clone(),
+            occluded: r.flags.occluded,
+            crowd: false,
+            raw: Map::new(),
+        });
+    }
+    frames
+}
