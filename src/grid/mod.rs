@@ -333,24 +333,18 @@ pub fn load(names: &[&str], shared: &std::path::Path) -> Result<Vec<Dataset>, Gr
 /// Seeds of the synthetic scenes of each family.
 pub const SYNTH_SEEDS: [u64; 3] = [101, 102, 103];
 
-/// The synthetic scene families and their scenes.
+/// The synthetic scenario families ([`crate::synth::Family`]) and their scenes.
 pub fn synthetic_families() -> BTreeMap<String, Vec<SynthConfig>> {
-    let mut out = BTreeMap::new();
-    out.insert(
-        "occlusion".to_string(),
-        SYNTH_SEEDS
-            .iter()
-            .map(|&s| SynthConfig::occlusion_scene(s))
-            .collect(),
-    );
-    out.insert(
-        "default".to_string(),
-        SYNTH_SEEDS
-            .iter()
-            .map(|&s| SynthConfig::with_seed(s))
-            .collect(),
-    );
-    out
+    crate::synth::Family::ALL
+        .into_iter()
+        .map(|f| {
+            let scenes = SYNTH_SEEDS
+                .iter()
+                .map(|&s| SynthConfig::family(f, s))
+                .collect();
+            (f.name().to_string(), scenes)
+        })
+        .collect()
 }
 
 /// The standard grid's cells over `datasets`: real detections where a dataset has them,

@@ -107,6 +107,70 @@ pub enum SynthError {
     },
 }
 
+/// Scenario families that stress a shape tracker, one stress each (see
+/// [`SynthConfig::family`] for their settings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Family {
+    /// Four streams of shapes (right, down, left, up) crossing one another, entering and
+    /// leaving: 10 shapes of radius 16–30 at 2.5–4.5 px/frame.
+    Crossing,
+    /// A dense crowd of look-alikes: 30 ellipses of radius 13–17 in colours of one hue band,
+    /// bouncing at 1–3 px/frame, touching and overlapping often.
+    Crowd,
+    /// Non-rigid shapes: 8 discs, ellipses, irregular polygons and stars whose area pulsates
+    /// by up to ±50 % (periods 30–90 frames) and whose outlines ripple (orders 2–4, up to 12 %
+    /// of the radius), bouncing at 1.5–3.5 px/frame; no occluders.
+    Deform,
+    /// Occluders: 8 shapes crossing horizontally at 3–5 px/frame behind two full-height bars
+    /// (sized for ~15-frame hides) and two free-standing rectangles.
+    Occluders,
+    /// Births and deaths: 10 fast shapes (3.5–6.5 px/frame) leaving through every border and
+    /// replaced by new ones entering.
+    EnterLeave,
+    /// A moving camera: the view pans (up to 3 px/frame) and zooms (0.8–1.25×, period 150
+    /// frames) over a world 1.6× the frame holding 10 shapes and a bar.
+    Camera,
+}
+
+impl Family {
+    /// Every family.
+    pub const ALL: [Family; 6] = [
+        Family::Crossing,
+        Family::Crowd,
+        Family::Deform,
+        Family::Occluders,
+        Family::EnterLeave,
+        Family::Camera,
+    ];
+
+    /// The family's name (`crossing`, `crowd`, `deform`, `occluders`, `enter-leave`, `camera`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Crossing => "crossing",
+            Family::Crowd => "crowd",
+            Family::Deform => "deform",
+            Family::Occluders => "occluders",
+            Family::EnterLeave => "enter-leave",
+            Family::Camera => "camera",
+        }
+    }
+}
+
+impl std::str::FromStr for Family {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Family::ALL
+            .into_iter()
+            .find(|f| f.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Family::ALL.iter().map(|f| f.name()).collect();
+                format!("unknown scene family {s:?} (known: {})", names.join(", "))
+            })
+    }
+}
+
 /// What happens when an object reaches the frame border.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum BorderPolicy {
@@ -144,6 +208,51 @@ pub struct MotionConfig {
     pub direction_spread: Option<f64>,
     /// Border behaviour. Default [`BorderPolicy::Exit`].
     pub border: BorderPolicy,
+    /// Outline families random objects are drawn from; `None`: every [`ShapeKind`].
+    #[serde(default)]
+    pub kinds: Option<Vec<ShapeKind>>,
+    /// Headings (radians, 0 = rightwards, π/2 = downwards) random objects start and enter
+    /// with, each within `direction_spread` (default 0.2) of one of these: streams that cross.
+    /// `None`: any direction (or `direction_spread` around horizontal).
+    #[serde(default)]
+    pub headings: Option<Vec<f64>>,
+    /// Non-rigid deformation of random objects; `None`: rigid shapes.
+    #[serde(default)]
+    pub deform: Option<DeformConfig>,
+}
+
+/// Non-rigid deformation: each random object's area pulsates and its outline ripples, both
+/// smoothly and with its own seeded rates (drawn from a stream of their own, so turning
+/// deformation on changes nothing else in the scene). The texture follows the pulsation; the
+/// ripples move the outline over it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DeformConfig {
+    /// The area varies as `1 + a·sin(2πt/T + φ)` with `a` drawn in
+    /// `[area_amplitude/2, area_amplitude]` per object: 0.5 is ±50 % (largest area 3× the
+    /// smallest).
+    pub area_amplitude: f64,
+    /// Radial ripples of orders 2, 3 and 4, each of amplitude up to this fraction of the
+    /// radius, every one with its own period and phase.
+    pub outline_amplitude: f64,
+    /// Range of the periods (frames) of the pulsation and the ripples.
+    pub period: (f64, f64),
+}
+
+/// A camera moving over a world larger than the frame: the background, the occluders and the
+/// objects live in world coordinates; each frame is the view through a camera that pans and
+/// zooms smoothly (its motion drawn from a stream of its own). Ground truth and detections are
+/// in image coordinates; objects enter and leave the view as it pans.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CameraConfig {
+    /// The world is this many times the frame on each side (≥ 1).
+    pub world_scale: f64,
+    /// Largest pan speed, world pixels per frame.
+    pub pan_speed: f64,
+    /// Zoom range (image pixels per world pixel), e.g. `(0.8, 1.25)`; must contain values
+    /// for which the view fits in the world.
+    pub zoom_range: (f64, f64),
+    /// Period (frames) of the zoom's oscillation through its range.
+    pub zoom_period: f64,
 }
 
 impl Default for MotionConfig {
@@ -158,6 +267,9 @@ impl Default for MotionConfig {
             scale_range: (0.8, 1.25),
             direction_spread: None,
             border: BorderPolicy::Exit,
+            kinds: None,
+            headings: None,
+            deform: None,
         }
     }
 }
@@ -220,6 +332,10 @@ pub struct AppearanceConfig {
     /// Least luma difference between any object colour and the background's nominal grey.
     /// Default `50`.
     pub min_contrast: f64,
+    /// All objects' colours lie within this hue distance (on the 0–6 hue circle) of one
+    /// scene-wide hue, with 2–3 colours each: look-alike objects. `None`: any colours.
+    #[serde(default)]
+    pub similar_colours: Option<f64>,
 }
 
 impl Default for AppearanceConfig {
@@ -229,6 +345,7 @@ impl Default for AppearanceConfig {
             illumination_period: 250.0,
             sensor_noise: 0,
             min_contrast: 50.0,
+            similar_colours: None,
         }
     }
 }
@@ -348,6 +465,9 @@ pub struct SynthConfig {
     pub noise: NoiseConfig,
     /// Objects with exact trajectories, added to the random ones. Default none.
     pub scripted: Vec<ScriptedShape>,
+    /// A panning and zooming camera; `None`: a static camera whose view is the world.
+    #[serde(default)]
+    pub camera: Option<CameraConfig>,
 }
 
 impl Default for SynthConfig {
@@ -364,6 +484,7 @@ impl Default for SynthConfig {
             appearance: AppearanceConfig::default(),
             noise: NoiseConfig::default(),
             scripted: Vec::new(),
+            camera: None,
         }
     }
 }
@@ -434,6 +555,136 @@ impl SynthConfig {
         }
     }
 
+    /// A scene of the scenario family `family` (see [`Family`]): 640×480, 25 fps, 300 frames,
+    /// the default detection noise.
+    pub fn family(family: Family, seed: u64) -> Self {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let base = Self {
+            seed,
+            occlusion: OcclusionConfig {
+                bars: 0,
+                ..OcclusionConfig::default()
+            },
+            ..Self::default()
+        };
+        match family {
+            Family::Crossing => Self {
+                shapes: 10,
+                motion: MotionConfig {
+                    radius: (16.0, 30.0),
+                    speed: (2.5, 4.5),
+                    accel: 0.03,
+                    headings: Some(vec![0.0, FRAC_PI_2, PI, -FRAC_PI_2]),
+                    direction_spread: Some(0.15),
+                    border: BorderPolicy::Exit,
+                    ..MotionConfig::default()
+                },
+                ..base
+            },
+            Family::Crowd => Self {
+                shapes: 30,
+                motion: MotionConfig {
+                    radius: (13.0, 17.0),
+                    speed: (1.0, 3.0),
+                    max_rotation: 0.02,
+                    kinds: Some(vec![ShapeKind::Ellipse]),
+                    border: BorderPolicy::Bounce,
+                    ..MotionConfig::default()
+                },
+                appearance: AppearanceConfig {
+                    similar_colours: Some(0.35),
+                    ..AppearanceConfig::default()
+                },
+                ..base
+            },
+            Family::Deform => Self {
+                shapes: 8,
+                motion: MotionConfig {
+                    radius: (22.0, 34.0),
+                    speed: (1.5, 3.5),
+                    kinds: Some(vec![
+                        ShapeKind::Disc,
+                        ShapeKind::Ellipse,
+                        ShapeKind::Irregular,
+                        ShapeKind::Star,
+                    ]),
+                    scale_range: (1.0, 1.0),
+                    max_scale_rate: 0.0,
+                    deform: Some(DeformConfig {
+                        area_amplitude: 0.5,
+                        outline_amplitude: 0.12,
+                        period: (30.0, 90.0),
+                    }),
+                    border: BorderPolicy::Bounce,
+                    ..MotionConfig::default()
+                },
+                ..base
+            },
+            Family::Occluders => Self {
+                shapes: 8,
+                motion: MotionConfig {
+                    radius: (16.0, 24.0),
+                    speed: (3.0, 5.0),
+                    accel: 0.0,
+                    direction_spread: Some(0.35),
+                    border: BorderPolicy::Bounce,
+                    ..MotionConfig::default()
+                },
+                occlusion: OcclusionConfig {
+                    bars: 2,
+                    bar_width: None,
+                    hidden_frames: 15.0,
+                    rects: vec![
+                        OccluderRect {
+                            x: 250,
+                            y: 40,
+                            w: 130,
+                            h: 110,
+                        },
+                        OccluderRect {
+                            x: 400,
+                            y: 330,
+                            w: 150,
+                            h: 110,
+                        },
+                    ],
+                },
+                ..base
+            },
+            Family::EnterLeave => Self {
+                shapes: 10,
+                motion: MotionConfig {
+                    radius: (14.0, 30.0),
+                    speed: (3.5, 6.5),
+                    accel: 0.1,
+                    border: BorderPolicy::Exit,
+                    ..MotionConfig::default()
+                },
+                ..base
+            },
+            Family::Camera => Self {
+                shapes: 10,
+                motion: MotionConfig {
+                    radius: (16.0, 30.0),
+                    speed: (1.0, 3.0),
+                    border: BorderPolicy::Bounce,
+                    ..MotionConfig::default()
+                },
+                occlusion: OcclusionConfig {
+                    bars: 1,
+                    ..OcclusionConfig::default()
+                },
+                camera: Some(CameraConfig {
+                    world_scale: 1.6,
+                    pan_speed: 3.0,
+                    zoom_range: (0.8, 1.25),
+                    zoom_period: 150.0,
+                }),
+                ..base
+            },
+        }
+    }
+
     /// Checks every setting; [`Scene::new`] calls it.
     pub fn validate(&self) -> Result<(), SynthError> {
         fn range(field: &'static str, v: f64, min: f64, max: f64) -> Result<(), SynthError> {
@@ -488,6 +739,40 @@ impl SynthConfig {
         if let Some(s) = m.direction_spread {
             range("motion.direction_spread", s, 0.0, std::f64::consts::PI)?;
         }
+        if let Some(k) = &m.kinds {
+            range("motion.kinds.len", k.len() as f64, 1.0, 1e3)?;
+        }
+        if let Some(hs) = &m.headings {
+            range("motion.headings.len", hs.len() as f64, 1.0, 1e3)?;
+            for &h in hs {
+                range("motion.headings", h, -100.0, 100.0)?;
+            }
+        }
+        if let Some(d) = &m.deform {
+            range("motion.deform.area_amplitude", d.area_amplitude, 0.0, 0.9)?;
+            range(
+                "motion.deform.outline_amplitude",
+                d.outline_amplitude,
+                0.0,
+                0.5,
+            )?;
+            pair("motion.deform.period", d.period, 2.0, 1e6)?;
+        }
+        if let Some(c) = &self.camera {
+            range("camera.world_scale", c.world_scale, 1.0, 8.0)?;
+            range("camera.pan_speed", c.pan_speed, 0.0, 1000.0)?;
+            pair("camera.zoom_range", c.zoom_range, 1.0 / c.world_scale, 10.0)?;
+            range("camera.zoom_period", c.zoom_period, 2.0, 1e9)?;
+            let world = |side: u32| side as f64 * c.world_scale;
+            if world(self.width) * world(self.height) > 64.0 * 1024.0 * 1024.0 {
+                return Err(SynthError::OutOfRange {
+                    field: "camera.world_scale",
+                    value: c.world_scale,
+                    min: 1.0,
+                    max: (64.0 * 1024.0 * 1024.0 / (self.width as f64 * self.height as f64)).sqrt(),
+                });
+            }
+        }
         let o = &self.occlusion;
         range("occlusion.bars", o.bars as f64, 0.0, 100.0)?;
         range("occlusion.hidden_frames", o.hidden_frames, 0.0, 1e4)?;
@@ -505,6 +790,9 @@ impl SynthConfig {
             1e9,
         )?;
         range("appearance.min_contrast", a.min_contrast, 0.0, 100.0)?;
+        if let Some(c) = a.similar_colours {
+            range("appearance.similar_colours", c, 0.0, 3.0)?;
+        }
         let n = &self.noise;
         range("noise.miss_rate", n.miss_rate, 0.0, 1.0)?;
         range("noise.false_positives", n.false_positives, 0.0, 16.0)?;
@@ -570,6 +858,9 @@ const MAX_TEXTURE_BYTES: u64 = 256 << 20;
 const LAYOUT_STREAM: u64 = 0x6c61_796f;
 const OBJECT_STREAM: u64 = 0x6f62_6a73;
 const SENSOR_STREAM: u64 = 0x7365_6e73;
+const DEFORM_STREAM: u64 = 0x6465_666f;
+const CAMERA_STREAM: u64 = 0x6361_6d65;
+const PALETTE_STREAM: u64 = 0x7061_6c65;
 
 /// One object's ground truth in one frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -698,6 +989,125 @@ struct Object {
     drawn: Option<[i32; 4]>,
     /// This frame: full silhouette pixel count.
     full_area: u64,
+    /// Non-rigid deformation, when the scene deforms its objects.
+    deform: Option<Deform>,
+}
+
+/// One object's deformation (see [`DeformConfig`]): its area pulsation and three radial
+/// ripples, each `(amplitude, angular rate per frame, phase)`, the ripples with the cosine and
+/// sine of their angular offset.
+#[derive(Debug, Clone)]
+struct Deform {
+    area: (f64, f64, f64),
+    ripples: [(f64, f64, f64, f64, f64); 3],
+}
+
+impl Deform {
+    fn draw(cfg: &DeformConfig, seed: u64, id: u64) -> Deform {
+        let mut rng = stream(seed ^ id.wrapping_mul(0x9E6C_63D0_676A_9A99), DEFORM_STREAM);
+        let rate = |rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
+            std::f64::consts::TAU / uniform(rng, cfg.period.0, cfg.period.1)
+        };
+        let area = (
+            uniform(&mut rng, 0.5 * cfg.area_amplitude, cfg.area_amplitude),
+            rate(&mut rng),
+            uniform(&mut rng, 0.0, std::f64::consts::TAU),
+        );
+        let mut ripples = [(0.0, 0.0, 0.0, 1.0, 0.0); 3];
+        for r in &mut ripples {
+            let amp = uniform(&mut rng, 0.3, 1.0) * cfg.outline_amplitude;
+            let w = rate(&mut rng);
+            let phase = uniform(&mut rng, 0.0, std::f64::consts::TAU);
+            let (sp, cp) = sin_cos(uniform(&mut rng, 0.0, std::f64::consts::TAU));
+            *r = (amp, w, phase, cp, sp);
+        }
+        Deform { area, ripples }
+    }
+
+    /// Area factor at frame age `t`.
+    fn area_factor(&self, t: f64) -> f64 {
+        let (a, w, p) = self.area;
+        1.0 + a * sin_cos(w * t + p).0
+    }
+
+    /// Radial factor at frame age `t` of the outline point in direction `(c, s)` (unit).
+    fn radial(&self, t: f64, c: f64, s: f64) -> f64 {
+        // cos/sin of 2θ, 3θ, 4θ by complex multiplication: exact arithmetic, no trig.
+        let (c2, s2) = (c * c - s * s, 2.0 * c * s);
+        let (c3, s3) = (c2 * c - s2 * s, s2 * c + c2 * s);
+        let (c4, s4) = (c2 * c2 - s2 * s2, 2.0 * c2 * s2);
+        let mut f = 1.0;
+        for (&(amp, w, p, cp, sp), (ck, sk)) in
+            self.ripples.iter().zip([(c2, s2), (c3, s3), (c4, s4)])
+        {
+            f += amp * sin_cos(w * t + p).0 * (ck * cp - sk * sp);
+        }
+        f
+    }
+
+    /// How far beyond its rigid bound the object can reach.
+    fn reach(&self) -> f64 {
+        (1.0 + self.area.0).sqrt() * (1.0 + self.ripples.iter().map(|r| r.0).sum::<f64>())
+    }
+}
+
+/// The camera of a scene with [`CameraConfig`]: the view's centre in world coordinates, its
+/// pan velocity and acceleration, and its own random stream.
+#[derive(Debug, Clone)]
+struct Camera {
+    cfg: CameraConfig,
+    centre: [f64; 2],
+    vel: [f64; 2],
+    acc: [f64; 2],
+    timer: u32,
+    rng: rand_xoshiro::Xoshiro256PlusPlus,
+}
+
+impl Camera {
+    /// Image pixels per world pixel in frame `index` (1-based): a smooth oscillation through
+    /// the zoom range.
+    fn zoom(&self, index: u32) -> f64 {
+        let (lo, hi) = self.cfg.zoom_range;
+        let t = (index - 1) as f64 / self.cfg.zoom_period;
+        lo + (hi - lo) * (0.5 + 0.5 * sin_cos(std::f64::consts::TAU * t).0)
+    }
+
+    /// World coordinates of the view's top-left corner for a `w × h` image at `zoom`.
+    fn origin(&self, w: u32, h: u32, zoom: f64) -> [f64; 2] {
+        [
+            self.centre[0] - 0.5 * w as f64 / zoom,
+            self.centre[1] - 0.5 * h as f64 / zoom,
+        ]
+    }
+
+    /// One frame of panning, keeping the largest view inside the `world`.
+    fn step(&mut self, world: (u32, u32), w: u32, h: u32) {
+        if self.timer == 0 {
+            let (s, c) = sin_cos(uniform(&mut self.rng, 0.0, std::f64::consts::TAU));
+            let a = 0.15 * self.cfg.pan_speed * uniform(&mut self.rng, 0.0, 1.0);
+            self.acc = [a * c, a * s];
+            self.timer = below(&mut self.rng, 30, 90);
+        }
+        self.timer -= 1;
+        let max = self.cfg.pan_speed;
+        for i in 0..2 {
+            self.vel[i] = (self.vel[i] + self.acc[i]).clamp(-max, max);
+        }
+        let min_zoom = self.cfg.zoom_range.0;
+        let half = [0.5 * w as f64 / min_zoom, 0.5 * h as f64 / min_zoom];
+        let size = [world.0 as f64, world.1 as f64];
+        for i in 0..2 {
+            self.centre[i] += self.vel[i];
+            let (lo, hi) = (half[i], (size[i] - half[i]).max(half[i]));
+            if (self.centre[i] < lo && self.vel[i] < 0.0)
+                || (self.centre[i] > hi && self.vel[i] > 0.0)
+            {
+                self.vel[i] = -self.vel[i];
+                self.acc[i] = -self.acc[i];
+            }
+            self.centre[i] = self.centre[i].clamp(lo, hi);
+        }
+    }
 }
 
 /// A synthetic sequence being generated frame by frame (also an [`Iterator`] of frames).
@@ -717,13 +1127,43 @@ pub struct Scene {
     noise: Vec<u8>,
     raster: Rasterizer,
     rng: rand_xoshiro::Xoshiro256PlusPlus,
+    /// The world's size: the frame's, or larger with a camera.
+    world: (u32, u32),
+    camera: Option<Camera>,
+    /// With a camera: this frame's view of the occluder mask.
+    view_occ: Vec<u8>,
+    /// The scene-wide hue of look-alike objects ([`AppearanceConfig::similar_colours`]).
+    base_hue: f64,
 }
 
 impl Scene {
     /// Validates `cfg`, renders the background and occluders and places the initial objects.
     pub fn new(cfg: SynthConfig) -> Result<Scene, SynthError> {
         cfg.validate()?;
-        let (w, h) = (cfg.width, cfg.height);
+        let world = match &cfg.camera {
+            Some(c) => (
+                (cfg.width as f64 * c.world_scale).round() as u32,
+                (cfg.height as f64 * c.world_scale).round() as u32,
+            ),
+            None => (cfg.width, cfg.height),
+        };
+        let (w, h) = world;
+        let camera = cfg.camera.map(|c| {
+            let mut rng = stream(cfg.seed, CAMERA_STREAM);
+            let centre = [
+                uniform(&mut rng, 0.4, 0.6) * w as f64,
+                uniform(&mut rng, 0.4, 0.6) * h as f64,
+            ];
+            Camera {
+                cfg: c,
+                centre,
+                vel: [0.0, 0.0],
+                acc: [0.0, 0.0],
+                timer: 0,
+                rng,
+            }
+        });
+        let base_hue = uniform(&mut stream(cfg.seed, PALETTE_STREAM), 0.0, 6.0);
         let mut layout = stream(cfg.seed, LAYOUT_STREAM);
         let mut background = background::render(&mut layout, w, h);
         let occluders = background::occluders(
@@ -743,12 +1183,16 @@ impl Scene {
             background,
             occ,
             occluders,
-            ids: vec![0; w as usize * h as usize],
+            ids: vec![0; cfg.width as usize * cfg.height as usize],
             poly: Vec::new(),
             order: Vec::new(),
             noise: Vec::new(),
             raster: Rasterizer::default(),
             rng: stream(cfg.seed, OBJECT_STREAM),
+            world,
+            camera,
+            view_occ: Vec::new(),
+            base_hue,
             cfg,
         };
         for i in 0..scene.cfg.scripted.len() {
@@ -769,12 +1213,20 @@ impl Scene {
     }
 
     /// The static background with the occluders drawn in (RGB8, no objects, no illumination
-    /// drift or sensor noise): what a perfect background model converges to.
+    /// drift or sensor noise): what a perfect background model converges to. With a
+    /// [`CameraConfig`] it is the whole world ([`Scene::world_size`]), of which each frame
+    /// shows a moving view.
     pub fn background(&self) -> &[u8] {
         &self.background
     }
 
-    /// The static occluders (bars first, then the configured rectangles).
+    /// The world's size: the frame's, or larger with a [`CameraConfig`].
+    pub fn world_size(&self) -> (u32, u32) {
+        self.world
+    }
+
+    /// The static occluders (bars first, then the configured rectangles), in world
+    /// coordinates (image coordinates without a camera).
     pub fn occluders(&self) -> &[OccluderRect] {
         &self.occluders
     }
@@ -843,15 +1295,34 @@ impl Scene {
         scripted: bool,
     ) -> Object {
         let bound = shape::bound(&poly);
-        let palette = shape::palette(
-            &mut self.rng,
-            background::BG_LUMA,
-            self.cfg.appearance.min_contrast,
-        );
+        let palette = match self.cfg.appearance.similar_colours {
+            Some(spread) => shape::palette_near(
+                &mut self.rng,
+                background::BG_LUMA,
+                self.cfg.appearance.min_contrast,
+                self.base_hue,
+                spread,
+            ),
+            None => shape::palette(
+                &mut self.rng,
+                background::BG_LUMA,
+                self.cfg.appearance.min_contrast,
+            ),
+        };
         let texture = shape::texture(&mut self.rng, bound, &palette);
         let id = self.next_id;
         self.next_id += 1;
-        let (w, h) = (self.cfg.width as f64, self.cfg.height as f64);
+        let deform = match (&self.cfg.motion.deform, scripted) {
+            (Some(d), false) => Some(Deform::draw(d, self.cfg.seed, id)),
+            _ => None,
+        };
+        // A deforming outline needs vertices to ripple: split long edges.
+        let poly = if deform.is_some() {
+            shape::subdivide(&poly, 0.15 * bound)
+        } else {
+            poly
+        };
+        let (w, h) = (self.world.0 as f64, self.world.1 as f64);
         let entered = pos[0] + bound > 0.0
             && pos[0] - bound < w
             && pos[1] + bound > 0.0
@@ -877,6 +1348,7 @@ impl Scene {
             age: 0,
             drawn: None,
             full_area: 0,
+            deform,
         }
     }
 
@@ -884,12 +1356,15 @@ impl Scene {
     fn random_object(&mut self, inside: bool) -> Object {
         let m = self.cfg.motion.clone();
         let rng = &mut self.rng;
-        let kind = ShapeKind::ALL[below(rng, 0, ShapeKind::ALL.len() as u32) as usize];
+        let kind = match &m.kinds {
+            Some(k) => k[below(rng, 0, k.len() as u32) as usize],
+            None => ShapeKind::ALL[below(rng, 0, ShapeKind::ALL.len() as u32) as usize],
+        };
         let r = uniform(rng, m.radius.0, m.radius.1);
         let aspect = uniform(rng, 0.45, 0.85);
         let poly = shape::outline(kind, r, aspect, rng);
         let reach = shape::bound(&poly) * m.scale_range.1;
-        let (w, h) = (self.cfg.width as f64, self.cfg.height as f64);
+        let (w, h) = (self.world.0 as f64, self.world.1 as f64);
         let speed = uniform(rng, m.speed.0, m.speed.1);
         let spread = m.direction_spread.unwrap_or(std::f64::consts::PI);
         let leftward = rng.gen::<u32>() & 1 == 1;
@@ -942,6 +1417,33 @@ impl Scene {
                 }
             };
         }
+        let mut pos = pos;
+        if let Some(hs) = &m.headings {
+            // Streams: a heading of the list, within the spread; objects entering come in
+            // through the side the heading leaves from.
+            let spread = m.direction_spread.unwrap_or(0.2);
+            let hd = hs[below(rng, 0, hs.len() as u32) as usize];
+            dir = hd + uniform(rng, -spread, spread);
+            if !inside {
+                let (sh, ch) = sin_cos(hd);
+                let out = reach + 1.0;
+                pos = if ch.abs() >= sh.abs() {
+                    let y = uniform(rng, 0.0, h);
+                    if ch > 0.0 {
+                        [-out, y]
+                    } else {
+                        [w + out, y]
+                    }
+                } else {
+                    let x = uniform(rng, 0.0, w);
+                    if sh > 0.0 {
+                        [x, -out]
+                    } else {
+                        [x, h + out]
+                    }
+                };
+            }
+        }
         let (s, c) = sin_cos(dir);
         let angle = uniform(rng, 0.0, std::f64::consts::TAU);
         let omega = uniform(rng, -m.max_rotation, m.max_rotation);
@@ -964,7 +1466,35 @@ impl Scene {
     /// Draws background and objects into a new image and fills the id buffer.
     fn render(&mut self) -> Vec<u8> {
         let (w, h) = (self.cfg.width as i32, self.cfg.height as i32);
-        let mut img = self.background.clone();
+        // With a camera, the image starts as the view of the world background (nearest world
+        // pixel of each image pixel's centre), and the occluder mask is viewed the same way.
+        let view = self.camera.as_ref().map(|cam| {
+            let zoom = cam.zoom(self.next_index);
+            (cam.origin(self.cfg.width, self.cfg.height, zoom), zoom)
+        });
+        let mut img = match view {
+            None => self.background.clone(),
+            Some((org, zoom)) => {
+                let (ww, wh) = (self.world.0 as usize, self.world.1 as usize);
+                let mut img = vec![0u8; 3 * w as usize * h as usize];
+                self.view_occ.resize(w as usize * h as usize, 0);
+                let cols: Vec<usize> = (0..w)
+                    .map(|x| {
+                        ((org[0] + (x as f64 + 0.5) / zoom).floor().max(0.0) as usize).min(ww - 1)
+                    })
+                    .collect();
+                for y in 0..h as usize {
+                    let wy =
+                        ((org[1] + (y as f64 + 0.5) / zoom).floor().max(0.0) as usize).min(wh - 1);
+                    for (x, &wx) in cols.iter().enumerate() {
+                        let (i, wi) = (y * w as usize + x, wy * ww + wx);
+                        img[3 * i..3 * i + 3].copy_from_slice(&self.background[3 * wi..3 * wi + 3]);
+                        self.view_occ[i] = self.occ[wi];
+                    }
+                }
+                img
+            }
+        };
         self.ids.fill(0);
         self.order.clear();
         self.order.extend(0..self.objects.len());
@@ -982,19 +1512,42 @@ impl Scene {
             raster,
             ids,
             occ,
+            view_occ,
             ..
         } = self;
+        let occ: &[u8] = if view.is_some() { view_occ } else { occ };
         for &k in order.iter() {
             let o = &mut objects[k];
             let (sn, cs) = sin_cos(o.angle);
-            let sc = o.scale;
-            let (cx, cy) = (o.pos[0], o.pos[1]);
+            let mut sc = o.scale;
+            let (mut cx, mut cy) = (o.pos[0], o.pos[1]);
+            let t = o.age as f64;
+            if let Some(d) = &o.deform {
+                // The pulsation scales the area (and the texture with it).
+                sc *= d.area_factor(t).sqrt();
+            }
+            if let Some((org, zoom)) = view {
+                cx = (cx - org[0]) * zoom;
+                cy = (cy - org[1]) * zoom;
+                sc *= zoom;
+            }
             poly.clear();
+            let deform = o.deform.as_ref();
             poly.extend(o.poly.iter().map(|p| {
-                [
-                    cx + sc * (cs * p[0] - sn * p[1]),
-                    cy + sc * (sn * p[0] + cs * p[1]),
-                ]
+                // Ripples move each outline point along its direction from the centre.
+                let f = match deform {
+                    Some(d) => {
+                        let r = (p[0] * p[0] + p[1] * p[1]).sqrt();
+                        if r > 0.0 {
+                            d.radial(t, p[0] / r, p[1] / r)
+                        } else {
+                            1.0
+                        }
+                    }
+                    None => 1.0,
+                };
+                let (px, py) = (p[0] * f, p[1] * f);
+                [cx + sc * (cs * px - sn * py), cy + sc * (sn * px + cs * py)]
             }));
             o.full_area = raster.area(poly);
             let slot = (k + 1) as u16;
@@ -1116,8 +1669,11 @@ impl Scene {
 
     /// Advances every object by one frame and applies the border policy.
     fn step(&mut self) {
-        let (w, h) = (self.cfg.width as f64, self.cfg.height as f64);
+        let (w, h) = (self.world.0 as f64, self.world.1 as f64);
         let m = self.cfg.motion.clone();
+        if let Some(cam) = &mut self.camera {
+            cam.step(self.world, self.cfg.width, self.cfg.height);
+        }
         for o in &mut self.objects {
             o.age += 1;
             if !o.scripted {
@@ -1152,7 +1708,7 @@ impl Scene {
             if o.angle >= std::f64::consts::TAU || o.angle < 0.0 {
                 o.angle = o.angle.rem_euclid(std::f64::consts::TAU);
             }
-            let r = o.bound * o.scale;
+            let r = o.bound * o.scale * o.deform.as_ref().map_or(1.0, Deform::reach);
             match m.border {
                 BorderPolicy::Bounce => {
                     for (axis, size) in [(0, w), (1, h)] {
@@ -1184,7 +1740,7 @@ impl Scene {
         if m.border == BorderPolicy::Exit {
             let before = self.objects.iter().filter(|o| !o.scripted).count();
             self.objects.retain(|o| {
-                let r = o.bound * o.scale;
+                let r = o.bound * o.scale * o.deform.as_ref().map_or(1.0, Deform::reach);
                 let inside = o.pos[0] + r > 0.0
                     && o.pos[0] - r < w
                     && o.pos[1] + r > 0.0

@@ -140,6 +140,68 @@ pub(crate) fn palette<R: Rng>(rng: &mut R, bg: f64, contrast: f64) -> Vec<[u8; 3
     out
 }
 
+/// 2–3 colours within `spread` of hue `base` (on the 0–6 hue circle), alternately dark and
+/// bright, contrasting with the background like [`palette`]'s: look-alike objects for crowd
+/// scenes. Falls back on
+/// [`palette`]'s rules (any hue) when the band holds no contrasting colour.
+pub(crate) fn palette_near<R: Rng>(
+    rng: &mut R,
+    bg: f64,
+    contrast: f64,
+    base: f64,
+    spread: f64,
+) -> Vec<[u8; 3]> {
+    let k = rng.gen_range(2u32..4) as usize;
+    let mut out: Vec<[u8; 3]> = Vec::with_capacity(k);
+    for _ in 0..400 {
+        if out.len() == k {
+            break;
+        }
+        let hue = (base + uniform(rng, -spread, spread)).rem_euclid(6.0);
+        // Alternate a dark and a bright shade, so every object has the same light structure.
+        let v = if out.len() % 2 == 0 {
+            uniform(rng, 0.15, 0.4)
+        } else {
+            uniform(rng, 0.8, 1.0)
+        };
+        let c = hsv(hue, uniform(rng, 0.6, 1.0), v);
+        if (luma(c) - bg).abs() < contrast {
+            continue;
+        }
+        // Look-alikes: colours only need to differ enough for the texture to show.
+        let far = out.iter().all(|o| {
+            let d: i32 = (0..3).map(|i| (o[i] as i32 - c[i] as i32).abs()).sum();
+            d >= 60
+        });
+        if far {
+            out.push(c);
+        }
+    }
+    if out.len() < 2 {
+        return palette(rng, bg, contrast);
+    }
+    out
+}
+
+/// `poly` with every edge longer than `step` split into equal parts no longer than it (exact
+/// linear interpolation), so a deformation of the outline has vertices to move.
+pub(crate) fn subdivide(poly: &[[f64; 2]], step: f64) -> Vec<[f64; 2]> {
+    if step.is_nan() || step <= 0.0 {
+        return poly.to_vec();
+    }
+    let mut out = Vec::with_capacity(poly.len() * 4);
+    for (i, a) in poly.iter().enumerate() {
+        let b = poly[(i + 1) % poly.len()];
+        let len = ((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1])).sqrt();
+        let n = ((len / step).ceil() as usize).clamp(1, 64);
+        for j in 0..n {
+            let t = j as f64 / n as f64;
+            out.push([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]);
+        }
+    }
+    out
+}
+
 /// A texture in object space: texel `(i, j)` covers object coordinates
 /// `[i - half, i - half + 1) × [j - half, j - half + 1)`.
 #[derive(Debug, Clone)]

@@ -19,7 +19,7 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::ImageEncoder;
 use shapetrack::io::motchallenge::{write_mot, write_mots, SeqInfo};
 use shapetrack::io::{write_text, IoError, Record};
-use shapetrack::synth::{BorderPolicy, Scene, SynthConfig};
+use shapetrack::synth::{BorderPolicy, Family, Scene, SynthConfig};
 use std::path::{Path, PathBuf};
 
 /// Base configurations to start from; explicit flags override them.
@@ -77,6 +77,10 @@ pub struct Args {
     /// Base configuration.
     #[arg(long, value_enum, default_value_t = Preset::Default)]
     preset: Preset,
+    /// A scenario family instead of a preset: crossing, crowd, deform, occluders,
+    /// enter-leave, camera (see `SynthConfig::family`).
+    #[arg(long, conflicts_with = "preset")]
+    family: Option<Family>,
     /// Frame rate written to seqinfo.ini [preset's; default 25].
     #[arg(long)]
     fps: Option<f64>,
@@ -102,10 +106,11 @@ pub struct Args {
 
 impl Args {
     fn config(&self) -> SynthConfig {
-        let mut c = match self.preset {
-            Preset::Default => SynthConfig::default(),
-            Preset::Occlusion => SynthConfig::occlusion_scene(self.seed),
-            Preset::Demo => SynthConfig::demo(),
+        let mut c = match (self.family, self.preset) {
+            (Some(f), _) => SynthConfig::family(f, self.seed),
+            (None, Preset::Default) => SynthConfig::default(),
+            (None, Preset::Occlusion) => SynthConfig::occlusion_scene(self.seed),
+            (None, Preset::Demo) => SynthConfig::demo(),
         };
         c.seed = self.seed;
         c.frames = self.frames.unwrap_or(c.frames);
