@@ -1127,6 +1127,10 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub reupdate_after_gap: Option<bool>,
+    /// Tentative tracks compete with confirmed ones in the first association (ByteTrack).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub tentative_first: Option<bool>,
     /// Match lost tracks after the tracks seen in the previous frame.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1207,6 +1211,10 @@ pub struct TrackerConfig {
     )]
     #[tsify(optional, type = "number | null")]
     pub frame_rate: Option<Option<f64>>,
+    /// Scale the motion filter's process noise with the time between frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub motion_per_second: Option<bool>,
     /// The frame rate `max_lost` and `coast_frames` are given at.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]

@@ -50,6 +50,8 @@ pub enum StageTracks {
     Active,
     /// Tentative tracks (not yet confirmed).
     Tentative,
+    /// Confirmed, lost and tentative tracks together.
+    All,
 }
 
 impl StageTracks {
@@ -59,6 +61,7 @@ impl StageTracks {
             StageTracks::Lost => state == TrackState::Lost,
             StageTracks::Active => matches!(state, TrackState::Confirmed | TrackState::Lost),
             StageTracks::Tentative => state == TrackState::Tentative,
+            StageTracks::All => state != TrackState::Removed,
         }
     }
 }
@@ -133,6 +136,8 @@ pub fn stages(config: &Config) -> Vec<Stage> {
             config.max_cost,
         ));
         out.push(main("lost", StageTracks::Lost, High, config.max_cost));
+    } else if config.tentative_first {
+        out.push(main("all", StageTracks::All, High, config.max_cost));
     } else {
         out.push(main("active", StageTracks::Active, High, config.max_cost));
     }

@@ -251,6 +251,9 @@ pub struct Config {
     /// detections (DeepSORT's matching cascade, in two levels). Without it, lost and active
     /// tracks compete for the high detections in one assignment. Default false.
     pub lost_second: bool,
+    /// Tentative tracks take part in the first association together with the confirmed (and
+    /// lost) ones, as in ByteTrack, instead of getting what is left afterwards. Default false.
+    pub tentative_first: bool,
     /// Lost tracks are matched only by the re-identification stage (its terms, gates and
     /// `reid_max_cost`), which then runs before the tentative tracks' stage; the main
     /// association is for tracks seen in the previous frame. Geometric costs of a lost track
@@ -317,6 +320,12 @@ pub struct Config {
     /// [`Config::coast_frames`]) are scaled from [`Config::frame_counts_at`] to it, so a lost
     /// track is kept as long in seconds at 5 fps as at 30. `None`: counts are used as given.
     pub frame_rate: Option<f64>,
+    /// Scale the motion filter's process noise with the time between frames: its σ are given
+    /// per frame at [`Config::frame_counts_at`] fps, and at `fps` the position and velocity
+    /// noise are multiplied by `frame_counts_at / fps` (objects change speed and heading more
+    /// between two frames of a 5 fps video than of a 30 fps one). Needs
+    /// [`Config::frame_rate`]. Default false.
+    pub motion_per_second: bool,
     /// The frame rate those frame counts are given at. Default 30 (ByteTrack's convention:
     /// `track_buffer` 30 frames at 30 fps).
     pub frame_counts_at: f64,
@@ -347,6 +356,7 @@ impl Default for Config {
             lost_velocity_decay: 1.0,
             reupdate_after_gap: false,
             lost_second: false,
+            tentative_first: false,
             lost_reid_only: false,
             terms: Terms::default(),
             reid_terms: Terms::reid_default(),
@@ -369,6 +379,7 @@ impl Default for Config {
             coast_frames: 0,
             coasting: None,
             frame_rate: None,
+            motion_per_second: false,
             frame_counts_at: 30.0,
         }
     }
@@ -556,6 +567,22 @@ impl Config {
                 (n.clamp(1.0, u32::MAX as f64)) as u32
             }
             _ => frames,
+        }
+    }
+
+    /// The motion filter's noise at the video's frame rate (see
+    /// [`Config::motion_per_second`]).
+    pub fn motion_params(&self) -> BoxKalmanParams {
+        match (self.motion_per_second, self.frame_rate) {
+            (true, Some(fps)) => {
+                let k = self.frame_counts_at / fps;
+                BoxKalmanParams {
+                    std_position: self.motion.std_position * k,
+                    std_velocity: self.motion.std_velocity * k,
+                    ..self.motion
+                }
+            }
+            _ => self.motion,
         }
     }
 

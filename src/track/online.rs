@@ -121,7 +121,7 @@ impl Tracker {
     /// detections their centre only, so box mode needs nothing else).
     pub fn new(config: Config) -> Result<Self, TrackError> {
         config.validate()?;
-        let params = config.motion;
+        let params = config.motion_params();
         let motion: MotionBuilder = Box::new(move |z: &BBox| -> Result<BoxMotion, MotionError> {
             Ok(Box::new(BoxKalman::new(z, params)?))
         });

@@ -114,6 +114,15 @@ pub struct EvalArgs {
     /// Write the scores as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Evaluate many online configs in one process (datasets and detections loaded once): a
+    /// JSON-lines file of `{"label": …, "online": {…}, "offline": {…}}` (either part may be
+    /// absent), each applied over the preset (and over `--config`); one result line per config
+    /// is appended to `--results`.
+    #[arg(long, requires = "results")]
+    configs: Option<PathBuf>,
+    /// Where `--configs` results go (JSON lines, appended).
+    #[arg(long)]
+    results: Option<PathBuf>,
 }
 
 /// Arguments of `grid prepare`.
@@ -278,9 +287,105 @@ fn row(r: &MotResults) -> Row {
     Row::from(&r.summary().combined)
 }
 
+/// `patch` merged into `base`, objects field by field (as `Config::overlay`).
+fn merge(base: &mut serde_json::Value, patch: &serde_json::Value) {
+    match (base, patch) {
+        (serde_json::Value::Object(a), serde_json::Value::Object(b)) => {
+            for (k, v) in b {
+                match a.get_mut(k) {
+                    Some(slot) => merge(slot, v),
+                    None => {
+                        a.insert(k.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        (a, b) => *a = b.clone(),
+    }
+}
+
+/// One config line of `grid eval --configs`.
+#[derive(serde::Deserialize)]
+struct ConfigLine {
+    label: String,
+    #[serde(default)]
+    online: Option<serde_json::Value>,
+    #[serde(default)]
+    offline: Option<serde_json::Value>,
+}
+
+fn eval_many(
+    data: &[CellData<'_>],
+    args: &EvalArgs,
+    configs: &Path,
+    results: &Path,
+) -> crate::CliResult {
+    use std::io::Write as _;
+    let text = read_text(configs)?;
+    let mut out = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(results)
+        .map_err(|e| format!("{}: {e}", results.display()))?;
+    for (k, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let bad = |e: serde_json::Error| format!("{}:{}: {e}", configs.display(), k + 1);
+        let c: ConfigLine = serde_json::from_str(line).map_err(bad)?;
+        let t0 = std::time::Instant::now();
+        let mut cells: BTreeMap<String, BTreeMap<String, Row>> = BTreeMap::new();
+        for d in data {
+            for mut t in trackings(&args.tracker, &d.cell)? {
+                if let Some(o) = &c.online {
+                    t.config.online = t.config.online.overlay(o).map_err(bad)?;
+                }
+                if let Some(o) = &c.offline {
+                    let online = t.config.online.clone();
+                    let mut v = serde_json::to_value(&t.config).map_err(bad)?;
+                    merge(&mut v, o);
+                    t.config = serde_json::from_value(v).map_err(bad)?;
+                    t.config.online = online;
+                }
+                let r = row(&grid::run_cell(d, &t)?);
+                cells
+                    .entry(d.cell.name())
+                    .or_default()
+                    .insert(t.label().to_string(), r);
+            }
+        }
+        let rec = serde_json::json!({
+            "label": c.label,
+            "online": c.online,
+            "offline": c.offline,
+            "seconds": t0.elapsed().as_secs_f64(),
+            "cells": cells,
+        });
+        writeln!(out, "{rec}").map_err(|e| format!("{}: {e}", results.display()))?;
+        out.flush()
+            .map_err(|e| format!("{}: {e}", results.display()))?;
+        let hota: Vec<f64> = cells
+            .values()
+            .flat_map(|m| m.values().map(|r| r.hota))
+            .collect();
+        println!(
+            "{:40} mean HOTA {:.3} over {} runs ({:.1} s)",
+            c.label,
+            hota.iter().sum::<f64>() / hota.len().max(1) as f64,
+            hota.len(),
+            t0.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
 fn eval(args: EvalArgs) -> crate::CliResult {
     let (datasets, cells) = load(&args.select)?;
     let data = grid::cell_data(&datasets, &cells)?;
+    if let (Some(c), Some(r)) = (&args.configs, &args.results) {
+        return eval_many(&data, &args, c, r);
+    }
     let mut all: BTreeMap<String, BTreeMap<String, Row>> = BTreeMap::new();
     let t0 = std::time::Instant::now();
     for d in &data {
