@@ -16,6 +16,8 @@ Usage: scripts/grid.py [--cells GLOB,..] [--datasets D,..] [--peers LIST] [--out
               (ocsort-venv: numpy<2, its pinned scipy and filterpy): that needs PyPI once
   --bin       shapetrack binary (default: cargo build --release, then target/release/shapetrack)
   --jobs      peer runs in parallel (default 1; this machine has 2 cores)
+  --rerun-peers  run the peers again even where a cell's detections did not change (by default
+              their results are reused: a digest of the detections is kept beside them)
   --write     where to write grid.md/grid.json (default tests/data/quality; `-` for nowhere)
 
 Stages: `shapetrack grid prepare` writes each cell in TrackEval's layout with its detections;
@@ -25,7 +27,7 @@ update calls; `shapetrack grid score` and TrackEval (run_trackeval_mot.py, BENCH
 ground-truth root per cell) score every tracker folder. Only the standard library is needed to
 run this script itself.
 """
-import argparse, concurrent.futures, datetime, json, os, re, subprocess, sys, time
+import argparse, concurrent.futures, datetime, hashlib, json, os, re, subprocess, sys, time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, ".."))
@@ -88,8 +90,23 @@ def fps_of(cell_dir, seq):
     return float(re.search(r"^frameRate\s*=\s*(\S+)", text, re.M).group(1))
 
 
-def run_peer(py, peer, cell_dir, ocsort_py=None):
+def dets_digest(cell_dir):
+    """A digest of a cell's detection files: a peer's results are reused while it holds."""
+    h = hashlib.sha256()
+    for s in seqs_of(cell_dir):
+        h.update(s.encode())
+        with open(os.path.join(cell_dir, "det", s + ".txt"), "rb") as f:
+            h.update(f.read())
+    return h.hexdigest()
+
+
+def run_peer(py, peer, cell_dir, ocsort_py=None, reuse=True):
     data = os.path.join(cell_dir, "trackers", "MOT15-train", peer, "data")
+    stamp = os.path.join(cell_dir, "trackers", "MOT15-train", peer, "dets.sha256")
+    digest = dets_digest(cell_dir)
+    timing = os.path.join(cell_dir, "trackers", "MOT15-train", peer, "fps.txt")
+    if reuse and os.path.exists(stamp) and open(stamp).read() == digest and os.path.exists(timing):
+        return float(open(timing).read())
     os.makedirs(data, exist_ok=True)
     frames = secs = 0.0
     for s in seqs_of(cell_dir):
@@ -106,7 +123,10 @@ def run_peer(py, peer, cell_dir, ocsort_py=None):
         m = re.search(r"frames=(\d+).*tracker_time=([\d.]+)s", line)
         frames += int(m.group(1))
         secs += float(m.group(2))
-    return frames / secs if secs > 0 else float("inf")
+    fps = frames / secs if secs > 0 else float("inf")
+    open(timing, "w").write(repr(fps))
+    open(stamp, "w").write(digest)
+    return fps
 
 
 def trackeval(py, cell_dir, tracker):
@@ -138,6 +158,8 @@ def main():
     ap.add_argument("--bin", default=None)
     ap.add_argument("--no-trackeval", action="store_true")
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--rerun-peers", action="store_true",
+                    help="run the peers even where their results for the same detections exist")
     ap.add_argument("--write", default=os.path.join(REPO, "tests", "data", "quality"))
     a = ap.parse_args()
     t_start = time.time()
@@ -186,7 +208,8 @@ def main():
     jobs = [(p, c) for c in cells for p in peers]
     print(f"running {len(peers)} peers on {len(cells)} cells...", file=sys.stderr)
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = {ex.submit(run_peer, py, p, os.path.join(out, c), ocsort_py): (p, c) for p, c in jobs}
+        futs = {ex.submit(run_peer, py, p, os.path.join(out, c), ocsort_py, not a.rerun_peers): (p, c)
+                for p, c in jobs}
         for f in concurrent.futures.as_completed(futs):
             peer_fps[futs[f]] = f.result()
     stages["peers"] = time.time() - t

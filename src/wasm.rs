@@ -1363,6 +1363,10 @@ pub struct FillOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub hidden_ratio: Option<f64>,
+    /// Longest gap filled in seconds (instead of `max_gap` frames).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub max_gap_seconds: Option<f64>,
 }
 
 /// SIFT detector settings for the appearance snapshots (the core's `SiftConfig`).
@@ -1470,17 +1474,24 @@ pub struct OfflineOptions {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub appearance: Option<AppearanceOptions>,
+    /// Identities shorter than this many seconds of observed shapes are dropped.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub min_track_seconds: Option<f64>,
 }
 
 impl OfflineOptions {
     /// The core config: the given offline settings over the defaults, around `online`.
     pub fn to_core(&self, online: TrackConfig) -> Result<OfflineConfig, JsValue> {
         // Every part takes defaults for absent fields, so a JSON round trip does the overlay.
-        let parts = serde_json::json!({
+        let mut parts = serde_json::json!({
             "relink": self.relink.clone().unwrap_or_default(),
             "fill": self.fill.clone().unwrap_or_default(),
             "appearance": self.appearance.clone().unwrap_or_default(),
         });
+        if let (Some(m), Some(s)) = (parts.as_object_mut(), self.min_track_seconds) {
+            m.insert("min_track_seconds".into(), serde_json::json!(s));
+        }
         let mut cfg: OfflineConfig = serde_json::from_value(parts).map_err(js_error)?;
         cfg.online = online;
         cfg.validate().map_err(js_error)?;

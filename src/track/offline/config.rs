@@ -111,6 +111,9 @@ pub struct FillConfig {
     pub within_tracks: bool,
     /// Path of the filled shapes. Default [`Trajectory::Linear`].
     pub trajectory: Trajectory,
+    /// Longest gap filled in seconds instead of frames (`max_gap` then does not apply): a
+    /// gap of 10 frames is a blink at 30 fps and two seconds at 5 fps. `None`: `max_gap`.
+    pub max_gap_seconds: Option<f64>,
     /// Gaps between two *partial* mask views are hides, not missed detections, and are not
     /// filled: both the shape before the gap and the one after it have a mask smaller than
     /// this fraction of the median mask area of the identity's shapes near that end (it was
@@ -126,6 +129,7 @@ impl Default for FillConfig {
             max_gap: 10,
             within_tracks: true,
             trajectory: Trajectory::Linear,
+            max_gap_seconds: None,
             hidden_ratio: 0.5,
         }
     }
@@ -162,7 +166,7 @@ impl Default for AppearanceConfig {
 
 /// Everything the offline pass can be told: the online tracker's config plus the offline
 /// stages'. `{}` is a valid JSON config (all defaults).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OfflineConfig {
     /// The online pass.
@@ -173,6 +177,33 @@ pub struct OfflineConfig {
     pub fill: FillConfig,
     /// Appearance snapshots.
     pub appearance: AppearanceConfig,
+    /// Identities with fewer observed (not filled-in) shapes than this many seconds' worth of
+    /// frames after joining are dropped: a short track nothing re-joined is most likely a
+    /// false one. Default 0 (keep every identity).
+    pub min_track_seconds: f64,
+}
+
+impl FillConfig {
+    /// The longest gap filled, in frames, at `fps`.
+    pub fn max_gap_frames(&self, fps: f64) -> u32 {
+        match self.max_gap_seconds {
+            Some(s) if s.is_finite() && fps.is_finite() => (s * fps).round().clamp(0.0, 1e6) as u32,
+            Some(_) => 0,
+            None => self.max_gap,
+        }
+    }
+}
+
+impl Default for OfflineConfig {
+    fn default() -> Self {
+        Self {
+            online: Config::default(),
+            relink: RelinkConfig::default(),
+            fill: FillConfig::default(),
+            appearance: AppearanceConfig::default(),
+            min_track_seconds: 0.0,
+        }
+    }
 }
 
 fn check(
@@ -223,6 +254,11 @@ impl OfflineConfig {
             (0.0..=1.0).contains(&v),
             "must be in [0, 1]",
         )?;
+        if let Some(v) = self.fill.max_gap_seconds {
+            check("fill.max_gap_seconds", v, v >= 0.0, "must be ≥ 0")?;
+        }
+        let v = self.min_track_seconds;
+        check("min_track_seconds", v, v >= 0.0, "must be ≥ 0")?;
         let v = self.appearance.max_side as f64;
         check("appearance.max_side", v, v >= 8.0, "must be ≥ 8")?;
         self.appearance.sift.validate()?;

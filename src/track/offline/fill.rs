@@ -35,7 +35,8 @@ pub(crate) fn fill_gaps(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Vec<TrackedShape>, OfflineError> {
     let mut out = Vec::new();
-    if cfg.max_gap == 0 {
+    let max_gap = cfg.max_gap_frames(fps);
+    if max_gap == 0 {
         return Ok(out);
     }
     let mut by_id: std::collections::BTreeMap<u64, Vec<usize>> = Default::default();
@@ -56,7 +57,7 @@ pub(crate) fn fill_gaps(
             let (ia, ib) = (idx[k - 1], idx[k]);
             let (a, b) = (&shapes[ia], &shapes[ib]);
             let missing = b.frame.saturating_sub(a.frame).saturating_sub(1);
-            if missing == 0 || missing > cfg.max_gap {
+            if missing == 0 || missing > max_gap {
                 continue;
             }
             let joined = origin.get(ia) != origin.get(ib);

@@ -292,6 +292,16 @@ pub fn relink(
     )?;
     result.filled = filled.len();
     shapes.extend(filled);
+    if config.min_track_seconds > 0.0 {
+        // Identities too short to be real: count their observed shapes.
+        let need = (config.min_track_seconds * fps).ceil();
+        let mut observed: std::collections::BTreeMap<u64, f64> = Default::default();
+        for s in shapes.iter().filter(|s| !s.interpolated) {
+            *observed.entry(s.id).or_default() += 1.0;
+        }
+        shapes.retain(|s| observed.get(&s.id).copied().unwrap_or(0.0) >= need);
+        result.filled = shapes.iter().filter(|s| s.interpolated).count();
+    }
     shapes.sort_by_key(|s| (s.frame, s.id));
     result.shapes = shapes;
     progress(Progress {

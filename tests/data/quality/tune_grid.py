@@ -5,7 +5,7 @@
       N random configs from the search space (the first line is the current defaults).
   shapetrack grid eval --mode online --input boxes --configs CONFIGS.jsonl --results R.jsonl
       evaluates them all in one process (datasets and detections loaded once).
-  tune_grid.py select R.jsonl PEERS.json [--mode online|offline] [--top K]
+  tune_grid.py select R.jsonl PEERS.json [--mode online|offline] [--top K] [--require CELL>=HOTA]
       scores every config against the best peer of each cell, picks the best on all cells,
       and reports leave-one-dataset-out (LODO) and leave-one-detector-model-out figures: for
       each held-out dataset (model), the config chosen on every other cell, scored on the
@@ -98,7 +98,7 @@ def group(cell, by):
     return model
 
 
-def select(results_path, peers_path, mode, top):
+def select(results_path, peers_path, mode, top, require=()):
     peers = json.load(open(peers_path))
     best = {c: max(v[p]["HOTA"] for p in PEERS if p in v) for c, v in peers.items()
             if any(p in v for p in PEERS)}
@@ -108,6 +108,9 @@ def select(results_path, peers_path, mode, top):
     for r in runs:
         ours = {c: t[mode]["HOTA"] for c, t in r["cells"].items() if mode in t and c in best}
         rows.append((r, ours))
+    # Hard requirements (e.g. MOT15's real detections must keep online HOTA ≥ 39).
+    for cell, floor in require:
+        rows = [(r, o) for r, o in rows if r["cells"].get(cell, {}).get(mode, {}).get("HOTA", -1) >= floor]
     cells = sorted(set.intersection(*[set(o) for _, o in rows])) if rows else []
 
     def obj(ours, subset):
@@ -157,7 +160,12 @@ def main():
     elif a[0] == "select":
         mode = a[a.index("--mode") + 1] if "--mode" in a else "online"
         top = int(a[a.index("--top") + 1]) if "--top" in a else 5
-        select(a[1], a[2], mode, top)
+        require = []
+        for i, x in enumerate(a):
+            if x == "--require":
+                cell, floor = a[i + 1].split(">=")
+                require.append((cell, float(floor)))
+        select(a[1], a[2], mode, top, require)
     else:
         sys.exit(__doc__)
 
