@@ -194,7 +194,9 @@ def main():
     for line in ours_log.splitlines():
         m = re.match(r"(\S+) (\S+): (\d+) frames in ([\d.]+) s", line)
         if m:
-            ours_fps[(m.group(1), m.group(2))] = int(m.group(3)) / max(float(m.group(4)), 1e-9)
+            # A cell timed at 0 s (too fast for the clock) gets no figure rather than a huge one.
+            if float(m.group(4)) > 0:
+                ours_fps[(m.group(1), m.group(2))] = int(m.group(3)) / float(m.group(4))
 
     cells = [c for c in cells_in(out) if not sel or any(
         re.fullmatch(p.replace("*", ".*"), c.replace("__", "/")) for p in (a.cells or "*").split(","))]

@@ -179,7 +179,9 @@ fn scalabel_detections_in_scalabel_tracks_out() {
         .filter_map(|l| l.bbox)
         .collect();
     assert!(recs.len() > 1000 && ids.len() > 20);
-    for r in recs.iter().take(200) {
+    // Boxes coasted over a missed detection keep their flag through Scalabel.
+    assert!(recs.iter().any(|r| r.flags.interpolated));
+    for r in recs.iter().filter(|r| !r.flags.interpolated).take(200) {
         assert!(boxes
             .iter()
             .any(|b| (b.x - r.bbox.x).abs() < 1e-6 && (b.w - r.bbox.w).abs() < 1e-6));

@@ -4,7 +4,8 @@
 
 use shapetrack::frame::{BBox, Detection, Frame, Mask, Point, TrackedShape};
 use shapetrack::synth::{
-    NoiseConfig, OccluderRect, OcclusionConfig, Scene, ScriptedShape, SynthConfig, SynthFrame,
+    Family, NoiseConfig, OccluderRect, OcclusionConfig, Scene, ScriptedShape, SynthConfig,
+    SynthFrame,
 };
 use shapetrack::track::features::pixel_hull;
 use shapetrack::track::{
@@ -286,7 +287,10 @@ fn lost_shape_reidentified_after_15_frame_occlusion_keeps_its_id() {
     for f in &fs {
         let frame = f.frame().unwrap();
         for s in t.update(Some(&frame), &f.detections).unwrap() {
-            if let Some(Some(obj)) = s.det_index.map(|i| f.detection_sources.get(i).copied()) {
+            if let Some(Some(obj)) = s
+                .det_index
+                .map(|i| fs[s.frame as usize - 1].detection_sources.get(i).copied())
+            {
                 by_object.entry(obj.unwrap_or(0)).or_default().insert(s.id);
             }
         }
@@ -349,4 +353,67 @@ fn bad_input_is_clipped_dropped_or_a_typed_error() {
         t.update(None, &[square(-10 + k, -10, 30)]).unwrap();
     }
     assert_eq!(t.tracks().len(), 1);
+}
+
+#[test]
+fn deforming_shapes_keep_one_id_each() {
+    // The deform family: 8 shapes whose outline changes every frame and whose area swings by
+    // up to ±50 %, with clean masks. A tracker that reads a shrinking outline as an occlusion
+    // or a new shape splits it into several identities. Frames
+    // where a shape meets another shape or an occluder are left out: what is checked is that
+    // deformation alone never changes an identity.
+    // Perfect detections: one whole mask per visible shape, so that a split detection is never
+    // what changes an identity.
+    let cfg = SynthConfig {
+        noise: NoiseConfig::perfect(),
+        ..SynthConfig::family(Family::Deform, 3)
+    };
+    let fs: Vec<SynthFrame> = Scene::new(cfg).unwrap().collect();
+    let alone = |f: &SynthFrame, id: u64| {
+        let g = f.gt.iter().find(|g| g.id == id)?;
+        let touches = f.gt.iter().any(|o| o.id != id && o.bbox.iou(&g.bbox) > 0.0);
+        Some(g.visibility > 0.99 && !touches)
+    };
+    let mut t = Tracker::new(Config::masks()).unwrap();
+    // Per object: frame index → id, for frames where it is alone.
+    let mut ids: BTreeMap<u64, BTreeMap<usize, u64>> = BTreeMap::new();
+    for f in &fs {
+        let frame = f.frame().unwrap();
+        for s in t.update(Some(&frame), &f.detections).unwrap() {
+            // Confirmation reports earlier tentative frames: look the detection up in its own.
+            let k = s.frame as usize - 1;
+            let src = &fs[k].detection_sources;
+            if let Some(Some(obj)) = s.det_index.and_then(|i| src.get(i).copied()) {
+                if alone(&fs[k], obj) == Some(true) {
+                    ids.entry(obj).or_default().insert(k, s.id);
+                }
+            }
+        }
+    }
+    let (mut alone_frames, mut reported, mut changes) = (0, 0, Vec::new());
+    for obj in 1..=8u64 {
+        let seen = ids.remove(&obj).unwrap_or_default();
+        for (k, f) in fs.iter().enumerate() {
+            if alone(f, obj) != Some(true) {
+                continue;
+            }
+            alone_frames += 1;
+            reported += usize::from(seen.contains_key(&k));
+            // An identity change between two consecutive frames where the shape is alone.
+            if let (Some(a), Some(b)) = (seen.get(&k), seen.get(&(k + 1))) {
+                if a != b {
+                    changes.push((obj, k, *a, *b));
+                }
+            }
+        }
+    }
+    assert!(alone_frames > 1000, "{alone_frames} frames alone");
+    assert!(
+        changes.is_empty(),
+        "(object, frame, id, new id): {changes:?}"
+    );
+    assert!(
+        reported as f64 >= 0.95 * alone_frames as f64,
+        "{reported} of {alone_frames} reported"
+    );
 }

@@ -48,7 +48,12 @@ fn track_mot15_sequence(seq: &str) -> (Vec<Record>, Vec<Record>, Vec<Record>) {
     )
     .unwrap();
     let frames = detections_by_frame(&dets, 1, info.seq_length);
-    let shapes = track_sequence(Config::default(), &frames).unwrap();
+    // As the CLI runs it: the defaults, told the video's frame rate.
+    let cfg = Config {
+        frame_rate: Some(info.frame_rate),
+        ..Config::default()
+    };
+    let shapes = track_sequence(cfg, &frames).unwrap();
     let res = to_records(&shapes, 1, Some((info.im_width, info.im_height)));
     (gt, dets, res)
 }
@@ -84,13 +89,19 @@ fn default_config_output_is_well_formed_on_all_mot15_sequences() {
                 "{seq}: {:?}",
                 r.bbox
             );
-            assert!(!r.flags.interpolated);
         }
 
-        // Every output box is one of that frame's detections (nothing invented online).
+        // Every output box is one of that frame's detections, except the few coasted over a
+        // missed detection (marked interpolated).
         let det_boxes: HashSet<(u32, [u64; 4])> =
             dets.iter().map(|d| (d.frame, key(&d.bbox))).collect();
-        for r in &res {
+        let coasted = res.iter().filter(|r| r.flags.interpolated).count();
+        assert!(
+            coasted * 20 < res.len(),
+            "{seq}: {coasted} of {} coasted",
+            res.len()
+        );
+        for r in res.iter().filter(|r| !r.flags.interpolated) {
             assert!(
                 det_boxes.contains(&(r.frame, key(&r.bbox))),
                 "{seq}: frame {} box {:?} is not a detection",
@@ -120,8 +131,9 @@ fn key(b: &BBox) -> [u64; 4] {
 
 /// Issue 3's acceptance: one global config, online, box mode, combined HOTA ≥ 36.7 (SORT scores
 /// 36.640 and ByteTrack 36.566 on the same `det.txt`; ../shared/data/README.md). IDF1 and IDSW
-/// must also beat SORT's (47.456, 708). Regression gate: the default config scored 39.022 when
-/// the mask pipeline was added (which must leave box mode alone); HOTA must stay ≥ 39.0.
+/// must also beat SORT's (47.456, 708). Regression gate: the defaults chosen on the robustness
+/// grid (issue 9) score 37.74 here — 1.3 below the earlier defaults, which were fitted to this
+/// detector alone and lost to the peers elsewhere — and must stay ≥ 37.5.
 #[test]
 fn online_box_mode_beats_the_peers_on_mot15() {
     let inputs: Vec<SequenceInput> = SEQUENCES
@@ -142,8 +154,8 @@ fn online_box_mode_beats_the_peers_on_mot15() {
     );
     assert!(c.hota >= 36.7, "combined HOTA {:.3} < 36.7", c.hota);
     assert!(
-        c.hota >= 39.0,
-        "combined HOTA {:.3} regressed below 39.0",
+        c.hota >= 37.5,
+        "combined HOTA {:.3} regressed below 37.5",
         c.hota
     );
     assert!(

@@ -59,6 +59,9 @@ pub struct ScalabelLabel {
     pub occluded: bool,
     /// `attributes.crowd`: a group of objects, not one (evaluation ignores it).
     pub crowd: bool,
+    /// `attributes.interpolated`: a box the tracker predicted or filled, not a detection
+    /// (this crate's attribute; Scalabel tools ignore attributes they do not know).
+    pub interpolated: bool,
     /// Every field of the label object as read; [`write_scalabel`] writes it unchanged.
     /// Empty for labels made by [`from_records`].
     pub raw: Map<String, Value>,
@@ -363,6 +366,7 @@ fn label_from_raw(
         rle,
         occluded: attr("occluded"),
         crowd: attr("crowd"),
+        interpolated: attr("interpolated"),
         raw: all,
     })
 }
@@ -412,6 +416,9 @@ fn label_json(l: &ScalabelLabel) -> Value {
     let mut attrs = Map::new();
     attrs.insert("occluded".into(), Value::Bool(l.occluded));
     attrs.insert("crowd".into(), Value::Bool(l.crowd));
+    if l.interpolated {
+        attrs.insert("interpolated".into(), Value::Bool(true));
+    }
     m.insert("attributes".into(), Value::Object(attrs));
     match (&l.rle, l.bbox) {
         (Some(r), _) => {
@@ -471,7 +478,7 @@ pub fn to_records(
                 visibility: -1.0,
                 mask: l.rle.clone(),
                 flags: RecordFlags {
-                    interpolated: false,
+                    interpolated: l.interpolated,
                     occluded: l.occluded,
                 },
             });
@@ -517,6 +524,7 @@ pub fn from_records(
             rle: r.mask.clone(),
             occluded: r.flags.occluded,
             crowd: false,
+            interpolated: r.flags.interpolated,
             raw: Map::new(),
         });
     }

@@ -185,7 +185,9 @@ pub struct Config {
     pub new_track_score: f64,
     /// Score thresholds from the sequence's own scores instead of `high_score` and
     /// `new_track_score` (see [`super::scores`]): quantiles of the scores of the detections
-    /// matched to confirmed tracks. `None`: the fixed thresholds.
+    /// matched to confirmed tracks. `None`: the fixed thresholds. Default: high from the
+    /// lowest matched score (quantile 0), births from the 0.2 quantile, chosen on the
+    /// robustness grid (`tests/data/quality/README.md`).
     pub score_adaptation: Option<ScoreAdaptation>,
     /// An unmatched detection overlapping a detection matched this frame by more than this IoU
     /// does not start a track: it is most likely a duplicate box on an already tracked object.
@@ -201,17 +203,17 @@ pub struct Config {
     /// the track is confirmed once its evidence reaches [`Config::confirm_hits`]. A persistent
     /// object whose detector scores it low is confirmed after `1/weight` times as many
     /// matches; clutter that does not persist never is. `None`: births need the birth
-    /// threshold and every match counts 1.
+    /// threshold and every match counts 1. Default 0.5.
     pub birth_evidence: Option<f64>,
     /// Fewest matches confirmation needs however low the frame rate (see
     /// [`Config::confirm_hits`]). Default: `u32::MAX`, i.e. `min_hits` is not scaled.
     pub min_hits_floor: u32,
-    /// Frames a tentative track may go unmatched before it is dropped. Default 0: its first
-    /// miss (ByteTrack).
+    /// Frames a tentative track may go unmatched before it is dropped. Default 1: a detector
+    /// that misses one frame in a few should not make every birth start over.
     pub max_tentative_misses: u32,
     /// Frames a confirmed track stays lost (searchable, re-identified under its id) before it
     /// is removed, at [`Config::frame_counts_at`] frames per second (scaled to the video's
-    /// [`Config::frame_rate`] when known). Default 15.
+    /// [`Config::frame_rate`] when known). Default 45 (1.5 s).
     pub max_lost: u32,
     /// When a tentative track is confirmed, also report its earlier (tentative) frames, so the
     /// output does not miss the first `min_hits − 1` frames of every track. The shapes are
@@ -232,7 +234,7 @@ pub struct Config {
     /// Default 0.5: a low-confidence box must overlap the prediction well.
     pub max_cost_low: f64,
     /// Highest combined cost accepted between a tentative track and a high detection.
-    /// Default 0.6.
+    /// Default 0.9: a new track's velocity is still unknown, so its prediction is loose.
     pub max_cost_tentative: f64,
     /// How much leaving a track or a detection unmatched costs in the assignment: a pair is
     /// matched only when its cost is below twice this (ByteTrack's lapjv `cost_limit`).
@@ -278,7 +280,8 @@ pub struct Config {
     /// Highest combined re-identification cost accepted. Default 0.6.
     pub reid_max_cost: f64,
     /// Noise of the constant-velocity box Kalman filter. Default σp = 0.02, σv = 0.0125,
-    /// σm = 0.06 (see [`crate::motion`]).
+    /// σm = 0.1 (see [`crate::motion`]), per frame at [`Config::frame_counts_at`] frames
+    /// per second (see [`Config::motion_per_second`]).
     pub motion: BoxKalmanParams,
     /// Mask features (shell, SIFT, colour, shape context) and when the tracker computes the
     /// appearance parts. Only mask detections with a frame get appearance.
@@ -308,12 +311,13 @@ pub struct Config {
     /// reported, at its predicted place with its last mask moved by the predicted motion
     /// (`interpolated: true`, `state: Lost`, no detection index): a shape seen whole cannot
     /// vanish behind an occluder in one frame, so a gap right after a whole view is a missed
-    /// detection. Default 0 (never invent shapes online, as on MOT15 boxes); the mask preset
-    /// ([`Config::masks`]) uses 2.
+    /// detection. Default 3 (with [`Config::coasting`]: only where this tracker's gaps of
+    /// that length usually close); the mask preset ([`Config::masks`]) uses 5, always.
     pub coast_frames: u32,
     /// Coast only when this tracker's history says a gap of the current length usually
     /// closes within `coast_frames` (see [`super::coasting`]). `None`: always coast up to
-    /// `coast_frames` after a whole view.
+    /// `coast_frames` after a whole view. Default: coasting with
+    /// [`Coasting::default`].
     pub coasting: Option<Coasting>,
     /// Frames per second of the video, when known (the CLI reads it from `seqinfo.ini`, the
     /// offline tracker is given it): frame counts that measure time ([`Config::max_lost`],
@@ -324,7 +328,7 @@ pub struct Config {
     /// per frame at [`Config::frame_counts_at`] fps, and at `fps` the position and velocity
     /// noise are multiplied by `frame_counts_at / fps` (objects change speed and heading more
     /// between two frames of a 5 fps video than of a 30 fps one). Needs
-    /// [`Config::frame_rate`]. Default false.
+    /// [`Config::frame_rate`]. Default true.
     pub motion_per_second: bool,
     /// The frame rate those frame counts are given at. Default 30 (ByteTrack's convention:
     /// `track_buffer` 30 frames at 30 fps).
@@ -332,26 +336,38 @@ pub struct Config {
 }
 
 impl Default for Config {
-    /// Chosen on six MOT15-train sequences (ADL-Rundle-6, ETH-Bahnhof, ETH-Pedcross2, KITTI-13,
-    /// PETS09-S2L1, TUD-Campus) by random search, and checked on the other five.
+    /// Chosen on the robustness grid (`shapetrack grid`, `tests/data/quality/README.md`):
+    /// MOT15, SportsMOT, BDD100K and synthetic scenes under eight detector models, by random
+    /// and local search against the best of five peer trackers per cell, with
+    /// leave-one-dataset-out figures as the estimate for unseen data. The mechanisms that
+    /// adapt (score thresholds from the sequence's scores, evidence-based confirmation,
+    /// coasting from the tracker's own gap statistics, time-based counts and motion noise)
+    /// replace constants that fitted one detector.
     fn default() -> Self {
         Self {
             min_score: 0.0,
             high_score: 0.6,
             new_track_score: 0.9,
-            score_adaptation: None,
+            // Thresholds from the sequence's own scores: a detector's calibration is not ours
+            // to assume (MOT15's Faster R-CNN scores 0.85–1, a YOLO 0.3–0.9, a thresholded
+            // browser detector a constant 1).
+            score_adaptation: Some(ScoreAdaptation {
+                high_quantile: 0.0,
+                birth_quantile: 0.2,
+                ..ScoreAdaptation::default()
+            }),
             spawn_max_iou: 1.0,
             min_hits: 5,
             min_hits_floor: u32::MAX,
-            birth_evidence: None,
-            max_tentative_misses: 0,
-            max_lost: 15,
+            birth_evidence: Some(0.5),
+            max_tentative_misses: 1,
+            max_lost: 45,
             report_tentative: true,
             region_margin: 0.5,
             region_margin_per_miss: 0.1,
             max_cost: 0.75,
             max_cost_low: 0.5,
-            max_cost_tentative: 0.6,
+            max_cost_tentative: 0.9,
             unmatched_cost: None,
             lost_velocity_decay: 1.0,
             reupdate_after_gap: false,
@@ -362,12 +378,13 @@ impl Default for Config {
             reid_terms: Terms::reid_default(),
             reid_at_confirmation: false,
             reid_max_cost: 0.6,
-            // Steadier positions and livelier velocities than ByteTrack's 1/20 and 1/160: people
-            // in these videos change pace, while detector boxes jitter less than assumed.
+            // Steadier positions and livelier velocities than ByteTrack's 1/20 and 1/160 (people
+            // and players change pace), and measurements trusted less than MOT15's boxes
+            // would allow: other detectors' boxes jitter more.
             motion: BoxKalmanParams {
                 std_position: 0.02,
                 std_velocity: 0.0125,
-                std_measurement: 0.06,
+                std_measurement: 0.1,
             },
             appearance: AppearanceConfig::default(),
             shape_variant: ShapeVariant::Contour,
@@ -376,10 +393,10 @@ impl Default for Config {
             amodal: true,
             sliver_ratio: 0.4,
             merge_fragments: false,
-            coast_frames: 0,
-            coasting: None,
+            coast_frames: 3,
+            coasting: Some(Coasting::default()),
             frame_rate: None,
-            motion_per_second: false,
+            motion_per_second: true,
             frame_counts_at: 30.0,
         }
     }
@@ -387,31 +404,41 @@ impl Default for Config {
 
 impl Config {
     /// The preset for instance masks with frames (synthetic scenes, MOTS, DAVIS): the
-    /// defaults with the changes below, chosen on synthetic occlusion scenes of seeds 11–22,
-    /// not on the tested seeds 1–3 (see `tests/data/track/README.md`).
+    /// defaults with the changes below, chosen on the mask cells of the robustness grid (the
+    /// synthetic families under clean and ragged masks, and BDD100K's model masks; see
+    /// `tests/data/quality/README.md`).
     ///
     /// - Geometry and motion: box IoU and IoA with the (amodal) predicted box, and mask IoU
     ///   with the last mask moved by the predicted motion; in clusters geometry cannot decide,
     ///   shape context C1 and colour C2 join them at 0.5/0.5 (thesis eq. 39).
+    /// - A detection is taken as partly hidden only below 0.4 of the track's reference area
+    ///   (`appearance.whole_ratio`): shapes that deform change area by up to ±50 % while in
+    ///   full view, and 0.85 read that as occlusion (and split them into several identities).
     /// - Lost tracks are matched only by re-identification (`lost_reid_only`): the detection
     ///   must lie inside the lost track's predicted box (grown by a quarter of its size on
     ///   each side, more with every missed frame: IoA gate 0.5), and its colours must be the
     ///   track's (reference view, gate 0.5); SIFT matches count too. At confirmation a new
     ///   track is checked against the lost ones (`reid_at_confirmation`).
-    /// - Shapes hide behind occluders for up to ~30 frames: `max_lost` 40.
+    /// - Shapes hide behind occluders for up to ~2 s: `max_lost` 60 (at 30 fps).
     /// - Detector-split masks are merged (`merge_fragments`); missed detections right after a
-    ///   whole view are coasted over for 2 frames (`coast_frames`).
-    /// - Detection scores: tracks start from 0.5 and are confirmed after 3 matches, tolerating
-    ///   one miss while tentative; detections from 0.3 are "high".
+    ///   whole view are coasted over for 5 frames (`coast_frames`, always: a mask seen whole
+    ///   does not vanish).
+    /// - Confirmed after 6 matches (by evidence, as the defaults), tolerating one miss while
+    ///   tentative: ragged masks start many short-lived tracks.
     pub fn masks() -> Self {
         let base = Self::default();
         Self {
             high_score: 0.3,
             new_track_score: 0.5,
-            min_hits: 3,
+            min_hits: 6,
+            appearance: AppearanceConfig {
+                whole_ratio: 0.4,
+                ..AppearanceConfig::default()
+            },
             max_tentative_misses: 1,
-            max_lost: 40,
-            coast_frames: 2,
+            max_lost: 60,
+            coast_frames: 5,
+            coasting: None,
             reid_at_confirmation: true,
             merge_fragments: true,
             lost_reid_only: true,

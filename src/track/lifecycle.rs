@@ -541,3 +541,15 @@ fn reupdate(
     m.predict();
     Ok(m)
 }
+
+/// Mutable references to two different tracks.
+pub(super) fn two_mut(tracks: &mut [Track], a: usize, b: usize) -> (&mut Track, &mut Track) {
+    debug_assert_ne!(a, b);
+    if a < b {
+        let (lo, hi) = tracks.split_at_mut(b);
+        (&mut lo[a], &mut hi[0])
+    } else {
+        let (lo, hi) = tracks.split_at_mut(a);
+        (&mut hi[0], &mut lo[b])
+    }
+}

@@ -61,8 +61,8 @@ use super::cost::{CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
 use super::fragments::{merge_fragments, Merge};
-use super::lifecycle::{BoxMotion, Track};
-use super::prepare::{kept, prepare, validate, Prepared};
+use super::lifecycle::{two_mut, BoxMotion, Track};
+use super::prepare::{kept, prepare, shape_of, validate, Prepared};
 use super::regions::{estimate_regions, Regions};
 use super::scores::{ScoreStats, Thresholds};
 use super::timing::{Phase, PhaseTimes, Timer};
@@ -789,34 +789,5 @@ impl Tracker {
         let id = self.next_id;
         self.next_id += 1;
         id
-    }
-}
-
-/// Mutable references to two different tracks.
-fn two_mut(tracks: &mut [Track], a: usize, b: usize) -> (&mut Track, &mut Track) {
-    debug_assert_ne!(a, b);
-    if a < b {
-        let (lo, hi) = tracks.split_at_mut(b);
-        (&mut lo[a], &mut hi[0])
-    } else {
-        let (lo, hi) = tracks.split_at_mut(a);
-        (&mut hi[0], &mut lo[b])
-    }
-}
-
-/// The shape reported for detection `d` matched to track `id` in tracker frame `frame`.
-fn shape_of(frame: u32, id: u64, state: TrackState, d: &Prepared<'_>, cost: f64) -> TrackedShape {
-    TrackedShape {
-        id,
-        frame,
-        bbox: d.det.bbox,
-        mask: d.det.mask.clone(),
-        centroid: d.features.centroid,
-        state,
-        score: d.det.score,
-        class: d.det.class,
-        cost,
-        det_index: Some(d.index),
-        interpolated: false,
     }
 }

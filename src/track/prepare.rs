@@ -7,7 +7,7 @@ use std::borrow::Cow;
 use super::cost::Candidate;
 use super::features::{FeatureExtractor, Features};
 use super::TrackError;
-use crate::frame::{Detection, Frame};
+use crate::frame::{Detection, Frame, TrackState, TrackedShape};
 
 /// Largest box coordinate or size accepted (pixels): far beyond any image, far below overflow
 /// (squaring 1e300 in an area or a covariance would overflow).
@@ -147,4 +147,27 @@ fn clip_to_frame<'a>(det: &'a Detection, frame: Option<&Frame<'_>>) -> Option<Co
         score: det.score,
         class: det.class,
     }))
+}
+
+/// The shape reported for detection `d` matched to track `id` in tracker frame `frame`.
+pub(super) fn shape_of(
+    frame: u32,
+    id: u64,
+    state: TrackState,
+    d: &Prepared<'_>,
+    cost: f64,
+) -> TrackedShape {
+    TrackedShape {
+        id,
+        frame,
+        bbox: d.det.bbox,
+        mask: d.det.mask.clone(),
+        centroid: d.features.centroid,
+        state,
+        score: d.det.score,
+        class: d.det.class,
+        cost,
+        det_index: Some(d.index),
+        interpolated: false,
+    }
 }

@@ -500,7 +500,7 @@ fn run_prepared(args: RunArgs) -> crate::CliResult {
                 &out.with_file_name("timing.txt"),
                 &format!("frames={frames} seconds={secs:.4}\n"),
             )?;
-            println!("{} {name}: {frames} frames in {secs:.2} s", d.cell.name());
+            println!("{} {name}: {frames} frames in {secs:.6} s", d.cell.name());
         }
     }
     Ok(())

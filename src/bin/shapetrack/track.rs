@@ -323,6 +323,10 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         shapes = res.shapes;
     }
+    // Shapes not taken from a detection: coasted online over a missed detection, or filled
+    // offline. MOT text cannot mark them; the count says how many there are.
+    let interpolated = shapes.iter().filter(|s| s.interpolated).count();
+    summary.push_str(&format!(" interpolated={interpolated}"));
 
     let format =
         args.format

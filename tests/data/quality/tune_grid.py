@@ -12,12 +12,19 @@
       held-out cells only. PEERS.json is `shapetrack grid score --json` of a grid run (or
       grid.json's "ours" part), holding the peers' per-cell results.
 
+  tune_grid.py local START.json PEERS.json RESULTS.jsonl [--rounds N] [--require CELL>=HOTA]
+                     [--datasets D,..] [--bin PATH]
+      a local search from START (an online config): each round evaluates every one-field
+      change of the current best (the space's other values), in one `grid eval` process, and
+      moves to the best change that raises the objective while meeting the requirements;
+      every evaluated config is appended to RESULTS (the pool `select` chooses from).
+
 Objective (per set of cells): mean over cells of (ours − best peer) HOTA, plus the mean of its
 negative part again, so a cell lost counts double and a config that wins everywhere by a
 little beats one that wins big on some cells and loses on others. Only the standard library
 is needed.
 """
-import json, random, sys, collections
+import collections, json, os, random, sys
 
 PEERS = ["rf_sort", "rf_bytetrack", "norfair", "ocsort", "motpy"]
 
@@ -149,6 +156,65 @@ def select(results_path, peers_path, mode, top, require=()):
         print(f"  {c:30} ours {chosen_ours[c]:6.2f}  best peer {best[c]:6.2f}  SORT {sort.get(c, float('nan')):6.2f}  {chosen_ours[c] - best[c]:+6.2f}")
 
 
+def flatten(d, prefix=""):
+    out = {}
+    for k, v in (d or {}).items():
+        key = prefix + k
+        if isinstance(v, dict) and key in ONLINE:
+            out[key] = v
+        elif isinstance(v, dict) and any(s.startswith(key + ".") for s in ONLINE):
+            out.update(flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def local(start_path, peers_path, results_path, rounds, require, datasets, binary):
+    import subprocess, tempfile
+    peers = json.load(open(peers_path))
+    best = {c: max(v[p]["HOTA"] for p in PEERS if p in v) for c, v in peers.items()
+            if any(p in v for p in PEERS)}
+
+    def score(rec):
+        ours = {c: t["online"]["HOTA"] for c, t in rec["cells"].items() if c in best}
+        if any(rec["cells"].get(c, {}).get("online", {}).get("HOTA", -1) < f for c, f in require):
+            return float("-inf")
+        return objective([ours[c] - best[c] for c in ours])
+
+    def evaluate(configs):
+        with tempfile.NamedTemporaryFile("w", suffix=".jsonl", delete=False) as f:
+            for label, cfg in configs:
+                f.write(json.dumps({"label": label, "online": nest(cfg)}) + "\n")
+            path = f.name
+        before = sum(1 for _ in open(results_path)) if os.path.exists(results_path) else 0
+        subprocess.run([binary, "grid", "eval", "--datasets", datasets, "--mode", "online",
+                        "--input", "boxes", "--configs", path, "--results", results_path],
+                       check=True, capture_output=True)
+        return [json.loads(l) for l in list(open(results_path))[before:]]
+
+    center = flatten(json.load(open(start_path)))
+    rec = evaluate([("local-start", center)])[0]
+    cur = score(rec)
+    print(f"start: objective {cur:+.3f}", flush=True)
+    for rnd in range(rounds):
+        cands = []
+        for k, values in ONLINE.items():
+            for v in values:
+                if center.get(k, "__unset__") == v:
+                    continue
+                c = dict(center)
+                c[k] = v
+                cands.append((f"local-{rnd}-{k}={json.dumps(v)}", c))
+        recs = evaluate(cands)
+        scored = sorted(((score(r), r, c) for r, (_, c) in zip(recs, cands)), key=lambda x: -x[0])
+        s, r, c = scored[0]
+        print(f"round {rnd}: best move {r['label']} → {s:+.3f} (was {cur:+.3f})", flush=True)
+        if s <= cur + 1e-3:
+            break
+        cur, center = s, c
+    print("local optimum:", json.dumps(nest(center)))
+
+
 def main():
     a = sys.argv[1:]
     if not a:
@@ -166,6 +232,12 @@ def main():
                 cell, floor = a[i + 1].split(">=")
                 require.append((cell, float(floor)))
         select(a[1], a[2], mode, top, require)
+    elif a[0] == "local":
+        rounds = int(a[a.index("--rounds") + 1]) if "--rounds" in a else 6
+        datasets = a[a.index("--datasets") + 1] if "--datasets" in a else "mot15,sportsmot,bdd,bdd-masks,synth"
+        binary = a[a.index("--bin") + 1] if "--bin" in a else "target/release/shapetrack"
+        require = [(x.split(">=")[0], float(x.split(">=")[1])) for i, x in enumerate(a) if i and a[i - 1] == "--require"]
+        local(a[1], a[2], a[3], rounds, require, datasets, binary)
     else:
         sys.exit(__doc__)
 
