@@ -213,7 +213,7 @@ pub struct Config {
     pub max_tentative_misses: u32,
     /// Frames a confirmed track stays lost (searchable, re-identified under its id) before it
     /// is removed, at [`Config::frame_counts_at`] frames per second (scaled to the video's
-    /// [`Config::frame_rate`] when known). Default 45 (1.5 s).
+    /// [`Config::frame_rate`] when known). Default 30 (1 s).
     pub max_lost: u32,
     /// When a tentative track is confirmed, also report its earlier (tentative) frames, so the
     /// output does not miss the first `min_hits − 1` frames of every track. The shapes are
@@ -363,7 +363,7 @@ impl Default for Config {
             min_hits_floor: u32::MAX,
             birth_evidence: Some(0.5),
             max_tentative_misses: 1,
-            max_lost: 45,
+            max_lost: 30,
             report_tentative: true,
             region_margin: 0.5,
             region_margin_per_miss: 0.1,
