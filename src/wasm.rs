@@ -1080,6 +1080,18 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub min_hits: Option<u32>,
+    /// Fewest matches confirmation needs however low the frame rate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub min_hits_floor: Option<u32>,
+    /// Weight of a match below the birth threshold towards confirmation (`null`: births
+    /// need the threshold and every match counts 1).
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub birth_evidence: Option<Option<f64>>,
     /// Frames a tentative track may go unmatched.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
@@ -1364,9 +1376,12 @@ pub struct FillOptions {
     #[tsify(optional)]
     pub hidden_ratio: Option<f64>,
     /// Longest gap filled in seconds (instead of `max_gap` frames).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[tsify(optional)]
-    pub max_gap_seconds: Option<f64>,
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub max_gap_seconds: Option<Option<f64>>,
 }
 
 /// SIFT detector settings for the appearance snapshots (the core's `SiftConfig`).
@@ -1565,6 +1580,9 @@ pub struct OfflineOutput {
     pub joins: Vec<JoinJs>,
     /// Number of records filled in.
     pub filled: u32,
+    /// The records filled in by this pass (not those the online pass had already coasted
+    /// over, which are in `records` flagged interpolated too).
+    pub added: Records,
 }
 
 #[wasm_bindgen]
@@ -1825,10 +1843,24 @@ impl Tracker {
                 k.shape.id = root;
             }
         }
+        // The result's interpolated shapes include those the online pass coasted over (they
+        // are in the history already): only the gaps the offline pass filled are new.
+        let kept: std::collections::HashSet<(u64, u32)> = self
+            .history
+            .iter()
+            .map(|k| (k.shape.id, k.shape.frame))
+            .collect();
         let mut filled = 0u32;
-        for mut s in result.shapes.into_iter().filter(|s| s.interpolated) {
+        let mut added = Vec::new();
+        for mut s in result
+            .shapes
+            .into_iter()
+            .filter(|s| s.interpolated && !kept.contains(&(s.id, s.frame)))
+        {
             let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
-            self.history.push(Kept { shape: s, rle });
+            let kept = Kept { shape: s, rle };
+            added.push(kept.record());
+            self.history.push(kept);
             filled += 1;
         }
         self.history.sort_by_key(|k| (k.shape.frame, k.shape.id));
@@ -1842,6 +1874,7 @@ impl Tracker {
             records: from_core_records(&records),
             joins: result.joins.iter().map(JoinJs::from).collect(),
             filled,
+            added: from_core_records(&added),
         })
     }
 }

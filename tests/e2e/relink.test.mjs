@@ -145,7 +145,11 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   await runScene(onlinePage, 'online');
   const online = await records(onlinePage);
   const onlineScores = await scores(onlinePage);
-  assert.ok(online.every((r) => !r.interpolated));
+  // The online pass reports confirmed tracks through short misses (coasted, interpolated).
+  // Known by frame and box: a coasted record keeps both through the offline pass (joins
+  // change its id only).
+  const place = (/** @type {Rec} */ r) => `${r.frame}:${r.bbox.x}:${r.bbox.y}:${r.bbox.w}:${r.bbox.h}`;
+  const coasted = new Set(online.filter((r) => r.interpolated).map(place));
   assert.deepEqual(onlineErrors, []);
   await onlinePage.close();
 
@@ -156,7 +160,8 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   const wallMs = Date.now() - t0;
   const st = await state(page);
   const offline = await records(page);
-  const filled = offline.filter((r) => r.interpolated);
+  // Interpolated offline: the online pass's coasted records plus the gaps this pass filled.
+  const filled = offline.filter((r) => r.interpolated && !coasted.has(place(r)));
 
   // The page state says what the pass did, and the table agrees with it.
   assert.ok(st.offline, 'the offline pass ran');

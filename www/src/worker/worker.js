@@ -278,7 +278,8 @@ function finish(id) {
   const ids = new Set(out.records.map((r) => r.id));
   return {
     joins: out.joins,
-    filled: out.records.filter((r) => r.interpolated),
+    // Only what this pass filled in: records the online pass coasted over are in the table.
+    filled: out.added,
     records: out.records.length,
     ids: ids.size,
     ms,
