@@ -214,16 +214,25 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   await page.evaluate((id) => /** @type {any} */ (window).__shapetrack.app.select(id, false), gap.id);
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
   const hatched = await timelineRow(page, gap.id, gap.frame, end);
-  // Up to 8 observed frames in a row ending at the last one before the gap (the online pass
-  // may have coasted over frames nearby: those are drawn hatched too).
+  // The inside of the track's longest run of observed frames before the gap (the online pass
+  // may have coasted over frames nearby: those are hatched too; a run's edge pixels blend).
   const beforeSet = new Set(before);
-  const last = Math.max(...before);
-  let first = last;
-  while (first > 1 && last - first < 8 && beforeSet.has(first - 1)) first--;
+  let [first, last] = [before[0], before[0]];
+  for (const f of before) {
+    if (beforeSet.has(f - 1)) continue;
+    let e = f;
+    while (beforeSet.has(e + 1)) e++;
+    if (e - f > last - first) [first, last] = [f, e];
+  }
+  if (last - first >= 4) [first, last] = [first + 1, last - 1];
   const solid = await timelineRow(page, gap.id, first, last);
   assert.ok(hatched.row >= 0, 'the track is in view on the timeline');
   assert.ok(new Set(hatched.pixels).size >= 2, `filled span hatched: ${[...new Set(hatched.pixels)]}`);
-  assert.equal(new Set(solid.pixels).size, 1, `observed span solid: ${[...new Set(solid.pixels)]}`);
+  // One colour, but for the current-frame cursor's line when it crosses the span.
+  const counts = new Map();
+  for (const px of solid.pixels) counts.set(String(px), (counts.get(String(px)) ?? 0) + 1);
+  const dominant = Math.max(...counts.values());
+  assert.ok(counts.size <= 2 && dominant >= 0.8 * solid.pixels.length, `observed span solid: ${[...counts]}`);
 
   // The overlay draws a filled shape dashed: gaps along its outline, unlike a detected one.
   // The overlay draws a filled shape dashed: gaps along its outline, unlike a detected one.
