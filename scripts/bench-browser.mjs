@@ -8,7 +8,7 @@
 
 import { mkdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, launch, serve } from '../tests/e2e/harness.mjs';
+import { DIST, OUT, launch, serve, untilState } from '../tests/e2e/harness.mjs';
 
 const arg = (/** @type {string} */ name, /** @type {number} */ fallback) => {
   const i = process.argv.indexOf(name);
@@ -23,16 +23,7 @@ const server = await serve(DIST, PORT);
 const browser = await launch();
 try {
   const page = await browser.context.newPage();
-  const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack?.state() ?? null);
-  const until = async (/** @type {(s: any) => boolean} */ pred) => {
-    const t0 = Date.now();
-    for (;;) {
-      const s = await state();
-      if (s && pred(s)) return s;
-      if (Date.now() - t0 > 300_000) throw new Error(`timed out; state: ${JSON.stringify(s)}`);
-      await new Promise((r) => setTimeout(r, 50));
-    }
-  };
+  const until = (/** @type {(s: any) => boolean} */ pred) => untilState(page, pred, 300_000);
   await page.goto(`${server.url}?speed=max`);
   // The first frames warm the wasm and the background model up: not measured.
   const s0 = await until((s) => s.processed >= 30);

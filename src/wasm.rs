@@ -1845,7 +1845,7 @@ impl Tracker {
         }
         // The result's interpolated shapes include those the online pass coasted over (they
         // are in the history already): only the gaps the offline pass filled are new.
-        let kept: std::collections::HashSet<(u64, u32)> = self
+        let present: std::collections::HashSet<(u64, u32)> = self
             .history
             .iter()
             .map(|k| (k.shape.id, k.shape.frame))
@@ -1855,7 +1855,7 @@ impl Tracker {
         for mut s in result
             .shapes
             .into_iter()
-            .filter(|s| s.interpolated && !kept.contains(&(s.id, s.frame)))
+            .filter(|s| s.interpolated && !present.contains(&(s.id, s.frame)))
         {
             let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
             let kept = Kept { shape: s, rle };

@@ -315,7 +315,7 @@ pub struct Config {
     /// detection. Default 8 at [`Config::frame_counts_at`] fps (with [`Config::coasting`]:
     /// only while this tracker's own gaps of that length usually close, so the count is an
     /// upper bound, not a guess of every video's gaps); the mask preset ([`Config::masks`])
-    /// uses 5, always.
+    /// uses 8, always.
     pub coast_frames: u32,
     /// Coast only when this tracker's history says a gap of the current length usually
     /// closes within `coast_frames` (see [`super::coasting`]). `None`: always coast up to

@@ -9,7 +9,7 @@ import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
 import { mkdirSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, launch, serve, watchErrors } from './harness.mjs';
+import { DIST, OUT, launch, pageState, serve, untilState, watchErrors } from './harness.mjs';
 
 const PORT = 47393;
 
@@ -35,19 +35,10 @@ after(async () => {
   await server?.close();
 });
 
-/** The page state, or null while the page is (re)loading. @returns {Promise<any>} */
-const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack?.state() ?? null);
+const state = () => pageState(page);
 
 /** @param {(s: any) => boolean} pred @param {number} [timeout] */
-async function until(pred, timeout = 120_000) {
-  const t0 = Date.now();
-  for (;;) {
-    const s = await state();
-    if (s && pred(s)) return s;
-    if (Date.now() - t0 > timeout) throw new Error(`timed out; state: ${JSON.stringify(s)}`);
-    await new Promise((r) => setTimeout(r, 100));
-  }
-}
+const until = (pred, timeout) => untilState(page, pred, timeout);
 
 /** @param {{ x: number, y: number, w: number, h: number }} a @param {{ x: number, y: number, w: number, h: number }} b */
 function iou(a, b) {

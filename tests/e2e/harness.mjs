@@ -134,3 +134,28 @@ export function watchErrors(page) {
   });
   return errors;
 }
+
+/**
+ * The app's page state (`window.__shapetrack.state()`), or null while the page is (re)loading.
+ * @param {import('playwright-core').Page} page
+ * @returns {Promise<any>}
+ */
+export function pageState(page) {
+  return page.evaluate(() => /** @type {any} */ (window).__shapetrack?.state() ?? null);
+}
+
+/**
+ * Polls the page state until `pred` holds, and returns that state.
+ * @param {import('playwright-core').Page} page
+ * @param {(s: any) => boolean} pred
+ * @param {number} [timeout] milliseconds
+ */
+export async function untilState(page, pred, timeout = 120_000) {
+  const t0 = Date.now();
+  for (;;) {
+    const s = await pageState(page);
+    if (s && pred(s)) return s;
+    if (Date.now() - t0 > timeout) throw new Error(`timed out; state: ${JSON.stringify(s)}`);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+}

@@ -98,6 +98,22 @@ def objective(margins):
     return sum(m) / len(m) + sum(min(x, 0.0) for x in m) / len(m)
 
 
+def best_peers(peers):
+    """The best peer's HOTA per cell (cells with at least one peer)."""
+    return {c: max(v[p]["HOTA"] for p in PEERS if p in v) for c, v in peers.items()
+            if any(p in v for p in PEERS)}
+
+
+def requirements(args):
+    """`--require CELL>=HOTA` options, as (cell, floor) pairs."""
+    out = []
+    for i, x in enumerate(args):
+        if i and args[i - 1] == "--require":
+            cell, floor = x.split(">=")
+            out.append((cell, float(floor)))
+    return out
+
+
 def group(cell, by):
     ds, model = cell.split("/")
     if by == "dataset":
@@ -107,8 +123,7 @@ def group(cell, by):
 
 def select(results_path, peers_path, mode, top, require=()):
     peers = json.load(open(peers_path))
-    best = {c: max(v[p]["HOTA"] for p in PEERS if p in v) for c, v in peers.items()
-            if any(p in v for p in PEERS)}
+    best = best_peers(peers)
     sort = {c: v["rf_sort"]["HOTA"] for c, v in peers.items() if "rf_sort" in v}
     runs = [json.loads(l) for l in open(results_path) if l.strip()]
     rows = []
@@ -172,8 +187,7 @@ def flatten(d, prefix=""):
 def local(start_path, peers_path, results_path, rounds, require, datasets, binary):
     import subprocess, tempfile
     peers = json.load(open(peers_path))
-    best = {c: max(v[p]["HOTA"] for p in PEERS if p in v) for c, v in peers.items()
-            if any(p in v for p in PEERS)}
+    best = best_peers(peers)
 
     def score(rec):
         ours = {c: t["online"]["HOTA"] for c, t in rec["cells"].items() if c in best}
@@ -187,9 +201,12 @@ def local(start_path, peers_path, results_path, rounds, require, datasets, binar
                 f.write(json.dumps({"label": label, "online": nest(cfg)}) + "\n")
             path = f.name
         before = sum(1 for _ in open(results_path)) if os.path.exists(results_path) else 0
-        subprocess.run([binary, "grid", "eval", "--datasets", datasets, "--mode", "online",
-                        "--input", "boxes", "--configs", path, "--results", results_path],
-                       check=True, capture_output=True)
+        try:
+            subprocess.run([binary, "grid", "eval", "--datasets", datasets, "--mode", "online",
+                            "--input", "boxes", "--configs", path, "--results", results_path],
+                           check=True, capture_output=True)
+        finally:
+            os.unlink(path)
         return [json.loads(l) for l in list(open(results_path))[before:]]
 
     center = flatten(json.load(open(start_path)))
@@ -226,18 +243,12 @@ def main():
     elif a[0] == "select":
         mode = a[a.index("--mode") + 1] if "--mode" in a else "online"
         top = int(a[a.index("--top") + 1]) if "--top" in a else 5
-        require = []
-        for i, x in enumerate(a):
-            if x == "--require":
-                cell, floor = a[i + 1].split(">=")
-                require.append((cell, float(floor)))
-        select(a[1], a[2], mode, top, require)
+        select(a[1], a[2], mode, top, requirements(a))
     elif a[0] == "local":
         rounds = int(a[a.index("--rounds") + 1]) if "--rounds" in a else 6
         datasets = a[a.index("--datasets") + 1] if "--datasets" in a else "mot15,sportsmot,bdd,bdd-masks,synth"
         binary = a[a.index("--bin") + 1] if "--bin" in a else "target/release/shapetrack"
-        require = [(x.split(">=")[0], float(x.split(">=")[1])) for i, x in enumerate(a) if i and a[i - 1] == "--require"]
-        local(a[1], a[2], a[3], rounds, require, datasets, binary)
+        local(a[1], a[2], a[3], rounds, requirements(a), datasets, binary)
     else:
         sys.exit(__doc__)
 
