@@ -52,6 +52,18 @@ const steps = [
     run: () => sh('cargo', ['clippy', ...WASM, '--lib', ...wasmTests(), '--', '-D', 'warnings']),
   },
   { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--no-fail-fast']) },
+  {
+    // The mutation fuzzer in release with overflow checks on (an overflow that wraps silently
+    // in release is a finding), 100,000 executions per reader (~40 s); `cargo test` runs it in
+    // debug with 2,000. The long run (10^6 each) is in the README.
+    name: 'fuzz parsers',
+    needs: ['setup'],
+    run: () =>
+      sh('cargo', ['test', '--release', '--test', 'fuzz_parsers'], {
+        FUZZ_ITERS: '100000',
+        CARGO_PROFILE_RELEASE_OVERFLOW_CHECKS: 'true',
+      }),
+  },
   { name: 'build wasm', needs: ['setup'], run: () => buildWasm() },
   {
     // In release (opt-level 3, like the native tests), not the browser build's size-optimised
@@ -65,6 +77,8 @@ const steps = [
   },
   { name: 'build app', needs: ['build wasm'], run: () => npx(['vite', 'build', '--config', 'www/vite.config.js', '--logLevel', 'warn']) },
   { name: 'js unit tests', needs: ['setup'], run: () => sh('node', ['--test', 'www/test/']) },
+  // The built package's JS API under hostile calls (Errors, never traps), in Node.
+  { name: 'wasm api (node)', needs: ['build wasm'], run: () => sh('node', ['--test', 'tests/wasm-node/']) },
   {
     name: 'js type check',
     needs: ['build wasm'],

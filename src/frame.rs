@@ -303,6 +303,12 @@ impl PixelFormat {
     }
 }
 
+/// `width · height` as a byte count, `usize::MAX` when it does not fit (on wasm32 `usize` is
+/// 32 bits: 65536 × 65536 would wrap to 0 and match an empty buffer).
+pub(crate) fn pixel_count(width: u32, height: u32) -> usize {
+    usize::try_from(width as u64 * height as u64).unwrap_or(usize::MAX)
+}
+
 /// A borrowed view of one video frame: no pixels are copied to build it.
 ///
 /// In the browser the bytes live in a buffer the wasm module owns and JavaScript writes into;
@@ -328,7 +334,9 @@ impl<'a> Frame<'a> {
         if width == 0 || height == 0 {
             return Err(FrameError::Empty { width, height });
         }
-        let row_bytes = width as usize * format.channels();
+        // Checked: on wasm32 `usize` is 32 bits, and a hostile size must not wrap around to
+        // a small buffer requirement.
+        let row_bytes = (width as usize).saturating_mul(format.channels());
         if stride < row_bytes {
             return Err(FrameError::StrideTooSmall {
                 stride,
@@ -336,7 +344,10 @@ impl<'a> Frame<'a> {
                 row_bytes,
             });
         }
-        let needed = stride * (height as usize - 1) + row_bytes;
+        let needed = stride
+            .checked_mul(height as usize - 1)
+            .and_then(|n| n.checked_add(row_bytes))
+            .unwrap_or(usize::MAX);
         if data.len() < needed {
             return Err(FrameError::BufferTooSmall {
                 len: data.len(),
@@ -357,12 +368,14 @@ impl<'a> Frame<'a> {
 
     /// A tightly packed RGB8 view (`stride = 3·width`).
     pub fn rgb(data: &'a [u8], width: u32, height: u32) -> Result<Self, FrameError> {
-        Self::new(data, width, height, width as usize * 3, PixelFormat::Rgb8)
+        let stride = (width as usize).saturating_mul(3);
+        Self::new(data, width, height, stride, PixelFormat::Rgb8)
     }
 
     /// A tightly packed RGBA8 view (`stride = 4·width`).
     pub fn rgba(data: &'a [u8], width: u32, height: u32) -> Result<Self, FrameError> {
-        Self::new(data, width, height, width as usize * 4, PixelFormat::Rgba8)
+        let stride = (width as usize).saturating_mul(4);
+        Self::new(data, width, height, stride, PixelFormat::Rgba8)
     }
 
     /// Width in pixels.
@@ -459,7 +472,7 @@ pub struct Mask {
 impl Mask {
     /// A mask whose bitmap (any non-zero byte = foreground) starts at image position `(x, y)`.
     pub fn new(x: i32, y: i32, width: u32, height: u32, data: Vec<u8>) -> Result<Self, FrameError> {
-        let expected = width as usize * height as usize;
+        let expected = pixel_count(width, height);
         if data.len() != expected {
             return Err(FrameError::MaskSize {
                 len: data.len(),
@@ -492,7 +505,7 @@ impl Mask {
     /// A mask from a full-image bitmap (`img_w·img_h` bytes, row-major), cropped to its
     /// foreground's bounding rectangle.
     pub fn from_full(img_w: u32, img_h: u32, full: &[u8]) -> Result<Self, FrameError> {
-        let expected = img_w as usize * img_h as usize;
+        let expected = pixel_count(img_w, img_h);
         if full.len() != expected {
             return Err(FrameError::MaskSize {
                 len: full.len(),

@@ -69,6 +69,31 @@ pub fn region_clusters(tracks: &[ConvexShell], dets: &[ConvexShell]) -> RegionEs
     region_clusters_with(tracks, dets, BroadPhase::SortAndSweep)
 }
 
+/// Most detections one track is compared with in a frame: the nearest ones (by centre) when
+/// more shells meet its search region. Real scenes stay far below it (a crowd of 200 similar
+/// shapes gives a handful per track); without it, thousands of stacked detections would make
+/// tracks × detections pairs (gigabytes).
+pub const MAX_CANDIDATES: usize = 64;
+
+/// Keeps, of one track's candidate detections `cands`, the [`MAX_CANDIDATES`] whose centres
+/// are nearest `centre` (ascending index order, so the result is as if only those had met).
+pub(crate) fn cap_candidates(
+    cands: &mut Vec<usize>,
+    centre: crate::frame::Point,
+    det_centre: impl Fn(usize) -> crate::frame::Point,
+) {
+    if cands.len() <= MAX_CANDIDATES {
+        return;
+    }
+    let d2 = |i: usize| {
+        let c = det_centre(i);
+        (c.x - centre.x).powi(2) + (c.y - centre.y).powi(2)
+    };
+    cands.sort_by(|&a, &b| d2(a).total_cmp(&d2(b)).then(a.cmp(&b)));
+    cands.truncate(MAX_CANDIDATES);
+    cands.sort_unstable();
+}
+
 /// [`region_clusters`] with a chosen broad phase (both give the same result).
 pub fn region_clusters_with(
     tracks: &[ConvexShell],
@@ -107,10 +132,23 @@ pub fn intersecting_pairs(
             .flat_map(|i| (0..pd.len()).map(move |j| (i, j)))
             .collect(),
     };
-    candidates
-        .into_iter()
-        .filter(|&(i, j)| pt[i].intersects_gjk(&pd[j]))
-        .collect()
+    // Per track, at most the nearest MAX_CANDIDATES, before GJK.
+    let mut out = Vec::new();
+    let mut cands = Vec::new();
+    for group in candidates.chunk_by(|a, b| a.0 == b.0) {
+        let i = group[0].0;
+        cands.clear();
+        cands.extend(group.iter().map(|&(_, j)| j));
+        let centre = pt[i].aabb().center();
+        cap_candidates(&mut cands, centre, |j| pd[j].aabb().center());
+        out.extend(
+            cands
+                .iter()
+                .filter(|&&j| pt[i].intersects_gjk(&pd[j]))
+                .map(|&j| (i, j)),
+        );
+    }
+    out
 }
 
 /// Connected components of the bipartite graph with `n_tracks + n_dets` nodes and the given

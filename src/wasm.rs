@@ -55,6 +55,9 @@ fn js_error<E: std::error::Error>(e: E) -> JsValue {
 /// An error raised by the bindings themselves (argument checks), as opposed to the core's.
 #[derive(Debug, thiserror::Error)]
 enum BindingError {
+    /// An input that cannot be read: a settings object (see `settings`), a mask too large.
+    #[error("{0}")]
+    Invalid(String),
     /// A frame size outside what a browser canvas can hold.
     #[error("frame size {width}x{height} is outside 1..={max} on each side")]
     FrameSize {
@@ -128,18 +131,94 @@ where
 /// serde-wasm-bindgen reads only the fields a struct declares, so `deny_unknown_fields` never
 /// fires through it and a typo (`max_lots`) would silently keep the default. Settings are
 /// small, so they go through a JSON value, which sees every key.
+///
+/// Before that, the JS value is walked without recursion: a nesting deeper than
+/// [`MAX_SETTINGS_DEPTH`] (which would overflow the stack and leave the module broken), more
+/// than [`MAX_SETTINGS_NODES`] values, a number that is not finite (JSON has no NaN, so it
+/// would silently read as "default") and a non-object where an object belongs (serde would
+/// read an array into a struct field by field) are errors naming the place.
 fn settings<T>(v: Ts<T>) -> Result<T, JsValue>
 where
     T: Tsify + serde::de::DeserializeOwned,
     T::JsType: JsCast,
 {
-    let json: serde_json::Value = serde_wasm_bindgen::from_value(v.js_value()).map_err(js_error)?;
+    let value = v.js_value();
+    check_settings_value(&value)?;
+    let json: serde_json::Value = serde_wasm_bindgen::from_value(value).map_err(js_error)?;
     serde_json::from_value(json).map_err(js_error)
+}
+
+/// Deepest nesting accepted in a settings object (the real ones nest 3 levels).
+const MAX_SETTINGS_DEPTH: usize = 32;
+
+/// Most values accepted in a settings object.
+const MAX_SETTINGS_NODES: usize = 100_000;
+
+/// The only settings fields that hold lists; an array anywhere else is an error.
+const SETTINGS_LISTS: &[&str] = &["labels"];
+
+/// The walk of [`settings`]: depth, size and finite numbers.
+fn check_settings_value(root: &JsValue) -> Result<(), JsValue> {
+    if !root.is_object() || js_sys::Array::is_array(root) {
+        return Err(js_error(BindingError::Invalid(
+            "settings must be a plain object".to_string(),
+        )));
+    }
+    let mut stack: Vec<(JsValue, String, usize)> = vec![(root.clone(), "config".into(), 0)];
+    let mut seen = 0usize;
+    while let Some((v, path, depth)) = stack.pop() {
+        seen += 1;
+        if seen > MAX_SETTINGS_NODES {
+            return Err(js_error(BindingError::Invalid(format!(
+                "settings hold more than {MAX_SETTINGS_NODES} values"
+            ))));
+        }
+        if let Some(x) = v.as_f64() {
+            if !x.is_finite() {
+                return Err(js_error(BindingError::Invalid(format!(
+                    "{path} = {x}: must be a finite number"
+                ))));
+            }
+        } else if v.is_object() {
+            let key = path.rsplit('.').next().unwrap_or_default();
+            if js_sys::Array::is_array(&v) && !SETTINGS_LISTS.contains(&key) {
+                return Err(js_error(BindingError::Invalid(format!(
+                    "{path} must be an object or a value, not an array"
+                ))));
+            }
+            if depth >= MAX_SETTINGS_DEPTH {
+                return Err(js_error(BindingError::Invalid(format!(
+                    "{path}: nested deeper than {MAX_SETTINGS_DEPTH} levels"
+                ))));
+            }
+            let obj: &js_sys::Object = v.unchecked_ref();
+            for entry in js_sys::Object::entries(obj).iter() {
+                let pair: js_sys::Array = entry.unchecked_into();
+                let key = pair.get(0).as_string().unwrap_or_default();
+                stack.push((pair.get(1), format!("{path}.{key}"), depth + 1));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Converts an output struct to its typed JS value.
 fn ts<T: Tsify + Serialize>(v: &T) -> Result<Ts<T>, JsValue> {
     v.into_ts().map_err(js_error)
+}
+
+/// A whole number from JS that fits `u32`. wasm-bindgen's own `u32` parameters wrap
+/// (`2**32 + 1` arrives as 1, `-1` as 4294967295), so the entry points that take sizes and
+/// frame numbers take `f64` and check it here.
+fn whole_u32(name: &'static str, v: f64) -> Result<u32, JsValue> {
+    if v.fract() == 0.0 && (0.0..=u32::MAX as f64).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(js_error(BindingError::Option {
+            name,
+            message: format!("{v} (must be a whole number in 0..=4294967295)"),
+        }))
+    }
 }
 
 /// The largest frame side accepted (a 16k canvas is already beyond every browser's limit).
@@ -159,9 +238,11 @@ pub struct FrameBuffer {
 
 #[wasm_bindgen]
 impl FrameBuffer {
-    /// Allocates `width·height·4` zeroed bytes.
+    /// Allocates `width·height·4` zeroed bytes; an allocation the browser refuses is an
+    /// error, not a trap.
     #[wasm_bindgen(constructor)]
-    pub fn new(width: u32, height: u32) -> Result<FrameBuffer, JsValue> {
+    pub fn new(width: f64, height: f64) -> Result<FrameBuffer, JsValue> {
+        let (width, height) = (whole_u32("width", width)?, whole_u32("height", height)?);
         if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
             return Err(js_error(BindingError::FrameSize {
                 width,
@@ -169,8 +250,16 @@ impl FrameBuffer {
                 max: MAX_SIDE,
             }));
         }
+        let n = width as usize * height as usize * 4;
+        let mut data = Vec::new();
+        data.try_reserve_exact(n).map_err(|_| {
+            js_error(BindingError::Invalid(format!(
+                "could not allocate a {width}x{height} frame ({n} bytes): out of memory"
+            )))
+        })?;
+        data.resize(n, 0);
         Ok(FrameBuffer {
-            data: vec![0; width as usize * height as usize * 4],
+            data,
             width,
             height,
         })
@@ -279,7 +368,16 @@ impl From<&Rle> for RleJs {
 
 impl RleJs {
     fn to_rle(&self) -> Result<Rle, JsValue> {
-        Rle::from_compressed(&self.counts, self.size[0], self.size[1]).map_err(js_error)
+        let [h, w] = self.size;
+        // The readers' cap (see `io::limits`): a mask must be decodable in wasm's memory.
+        if !crate::io::limits::image_size_ok(w as u64, h as u64) {
+            return Err(js_error(BindingError::Invalid(format!(
+                "RLE size {h}x{w} is outside 1..={} per side or over {} pixels",
+                crate::io::limits::MAX_SIDE,
+                crate::io::limits::MAX_PIXELS
+            ))));
+        }
+        Rle::from_compressed(&self.counts, h, w).map_err(js_error)
     }
 }
 
@@ -461,9 +559,20 @@ pub struct SequenceMeta {
 #[wasm_bindgen(js_name = parseAnnotations)]
 pub fn parse_annotations(
     format: Ts<Format>,
-    text: &str,
-    name: &str,
+    #[wasm_bindgen(unchecked_param_type = "string")] text: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "string")] name: JsValue,
 ) -> Result<Ts<Annotations>, JsValue> {
+    // Taken as JS values: a number passed as the text must be an error, not a trap in
+    // wasm-bindgen's string conversion.
+    let (text, name) = match (text.as_string(), name.as_string()) {
+        (Some(t), Some(n)) => (t, n),
+        _ => {
+            return Err(js_error(BindingError::Invalid(
+                "parseAnnotations(format, text, name): text and name must be strings".to_string(),
+            )))
+        }
+    };
+    let (text, name) = (text.as_str(), name.as_str());
     let out = match rust(format)? {
         Format::Mot => Annotations::plain(&motchallenge::parse_mot(text, name).map_err(js_error)?),
         Format::Mots => {
@@ -649,7 +758,8 @@ pub fn decode_mask(rle: Ts<RleJs>) -> Result<Ts<MaskBitmap>, JsValue> {
 
 /// Encodes a full-image bitmap (`width·height` bytes, non-zero = foreground) as compressed RLE.
 #[wasm_bindgen(js_name = encodeMask)]
-pub fn encode_mask(width: u32, height: u32, bitmap: &[u8]) -> Result<Ts<RleJs>, JsValue> {
+pub fn encode_mask(width: f64, height: f64, bitmap: &[u8]) -> Result<Ts<RleJs>, JsValue> {
+    let (width, height) = (whole_u32("width", width)?, whole_u32("height", height)?);
     let rle = Rle::encode(width, height, bitmap).map_err(js_error)?;
     ts(&RleJs::from(&rle))
 }
@@ -1733,10 +1843,11 @@ impl Tracker {
     /// Returns the online shapes this frame produced.
     pub fn update(
         &mut self,
-        frame: u32,
+        frame: f64,
         buf: &FrameBuffer,
         detections: &Detections,
     ) -> Result<Ts<Shapes>, JsValue> {
+        let frame = whole_u32("frame", frame)?;
         self.check_next(frame)?;
         self.check_size(buf.width, buf.height)?;
         let image = buf.frame()?;
@@ -1762,10 +1873,20 @@ impl Tracker {
     #[wasm_bindgen(js_name = updateDetections)]
     pub fn update_detections(
         &mut self,
-        frame: u32,
+        frame: f64,
         detections: &Detections,
     ) -> Result<Ts<Shapes>, JsValue> {
+        let frame = whole_u32("frame", frame)?;
         self.check_next(frame)?;
+        // Shapes are reported as RLE of the whole image: without its size a mask would come
+        // back empty (`size: [0, 0]`), so refuse before anything changes.
+        if self.image_size().is_none() && detections.inner.iter().any(|d| d.mask.is_some()) {
+            return Err(js_error(BindingError::Invalid(
+                "mask detections without a frame need the image size: pass width and height \
+                 in the tracker's options, or call update with a frame first"
+                    .to_string(),
+            )));
+        }
         let shapes = self
             .inner
             .update(None, &detections.inner)
@@ -1908,8 +2029,13 @@ impl Tracker {
         Ok(())
     }
 
+    /// The image size: from the frames, else from the offline options.
+    fn image_size(&self) -> Option<(u32, u32)> {
+        self.size.or(self.offline.as_ref().and_then(|o| o.size))
+    }
+
     fn report(&mut self, shapes: Vec<TrackedShape>) -> Result<Ts<Shapes>, JsValue> {
-        let (w, h) = self.size.unwrap_or((0, 0));
+        let (w, h) = self.image_size().unwrap_or((0, 0));
         let mut out = Vec::with_capacity(shapes.len());
         for mut s in shapes {
             let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
@@ -2018,7 +2144,8 @@ impl SynthScene {
     /// Renders frame `n` (1-based) as RGBA into `buf`, with its ground truth and the scene's
     /// own (noisy) detections. In-order frames cost one render; others replay from the nearest
     /// saved state.
-    pub fn render(&mut self, n: u32, buf: &mut FrameBuffer) -> Result<SceneFrame, JsValue> {
+    pub fn render(&mut self, n: f64, buf: &mut FrameBuffer) -> Result<SceneFrame, JsValue> {
+        let n = whole_u32("n", n)?;
         let (w, h, frames) = (self.width(), self.height(), self.frames());
         if n < 1 || n > frames {
             return Err(js_error(BindingError::FrameRange { frame: n, frames }));

@@ -1,9 +1,13 @@
 //! `shapetrack track` end to end: box mode on a MOT15 sequence, mask mode with real frames
-//! (DAVIS car-shadow, MOTS in and out, 0-based frames), and the flags' error paths.
+//! (DAVIS car-shadow, MOTS in and out, 0-based frames), and the flags' error paths; and hostile
+//! or careless input: sizes and frame numbers a few bytes can declare, outputs that would
+//! destroy inputs, missing frames, masks of the wrong size; memory that stays flat over a long
+//! video (the online output streams).
 
 use shapetrack::frame::Mask;
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mots};
 use shapetrack::io::{read_text, Record, RecordFlags, Rle};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -217,4 +221,201 @@ fn scalabel_detections_in_scalabel_tracks_out() {
     let o = track(&["--det", s(&bad), "--out", s(&dir.join("y.txt"))]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("frameIndex"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile and careless input
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// `n` frames of `k` boxes walking right, MOTChallenge det.txt.
+fn walking_boxes(frames: u32, k: u32) -> String {
+    let mut t = String::new();
+    for f in 1..=frames {
+        for j in 0..k {
+            let x = (f % 500) as f64 * 2.0 + j as f64 * 60.0;
+            let y = 50.0 + j as f64 * 40.0;
+            let _ = writeln!(t, "{f},-1,{x},{y},30,60,0.9");
+        }
+    }
+    t
+}
+
+fn seqinfo(dir: &Path, len: &str, w: u32, h: u32) -> PathBuf {
+    let p = dir.join("seqinfo.ini");
+    std::fs::write(
+        &p,
+        format!("[Sequence]\nname=s\nimDir=img1\nframeRate=30\nseqLength={len}\nimWidth={w}\nimHeight={h}\nimExt=.png\n"),
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn absurd_frame_numbers_and_lengths_are_typed_errors() {
+    let dir = scratch("robust_frames");
+    let out = dir.join("out.txt");
+    // Frame 4294967295 on the second line: once an abort allocating 100 GB.
+    let det = dir.join("det.txt");
+    std::fs::write(&det, "1,-1,1,1,5,5,1\n4294967295,-1,1,1,5,5,1\n").unwrap();
+    let o = track(&["--det", s(&det), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("det.txt:2:1") && stderr(&o).contains("cap"),
+        "{}",
+        stderr(&o)
+    );
+    // seqLength of four billion.
+    std::fs::write(&det, walking_boxes(60, 2)).unwrap();
+    let ini = seqinfo(&dir, "4294967295", 640, 480);
+    let o = track(&["--det", s(&det), "--seqinfo", s(&ini), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("seqLength"), "{}", stderr(&o));
+    // A million declared frames with 60 detected ones: a correct result (the empty stretch
+    // after the last track is skipped, not tracked frame by frame into memory).
+    let ini = seqinfo(&dir, "1000000", 640, 480);
+    let o = track(&["--det", s(&det), "--seqinfo", s(&ini), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("frames=1000000"));
+    let res = parse_mot(&read_text(&out).unwrap(), "out").unwrap();
+    assert!(res.len() > 100 && res.iter().all(|r| r.frame <= 70));
+    // A zero image width.
+    let ini = seqinfo(&dir, "60", 0, 480);
+    let o = track(&["--det", s(&det), "--seqinfo", s(&ini), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("imWidth"), "{}", stderr(&o));
+}
+
+#[test]
+fn huge_mots_masks_and_masks_of_another_size_are_refused() {
+    let dir = scratch("robust_mots");
+    let out = dir.join("out.txt");
+    // 25 bytes declaring a 65536 × 65536 mask: once 89 s and 6.3 GB.
+    let rle = Rle {
+        height: 65536,
+        width: 65536,
+        counts: vec![0, 1 << 31, 1 << 31],
+    };
+    let det = dir.join("masks.txt");
+    std::fs::write(
+        &det,
+        format!("1 -1 -1 65536 65536 {}\n", rle.to_compressed()),
+    )
+    .unwrap();
+    let o = track(&["--det", s(&det), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("masks.txt:1"), "{}", stderr(&o));
+    // 320×240 masks in a video seqinfo says is 100×50: once every mask written empty.
+    let mut bitmap = vec![0u8; 320 * 240];
+    bitmap[240 * 320 / 2 + 160] = 1;
+    let m = Rle::encode(320, 240, &bitmap).unwrap();
+    std::fs::write(&det, format!("1 1 1 240 320 {}\n", m.to_compressed())).unwrap();
+    let ini = seqinfo(&dir, "1", 100, 50);
+    let o = track(&["--det", s(&det), "--seqinfo", s(&ini), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("320x240 mask"), "{}", stderr(&o));
+}
+
+#[test]
+fn outputs_never_destroy_inputs_or_old_results() {
+    let dir = scratch("robust_out");
+    let det = dir.join("det.txt");
+    let text = walking_boxes(30, 2);
+    std::fs::write(&det, &text).unwrap();
+    // --out naming the detections (spelt differently) is refused; the file is untouched.
+    let same = dir.join(".").join("det.txt");
+    let o = track(&["--det", s(&det), "--out", s(&same)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("is an input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&det).unwrap(), text);
+    // A run that fails after the output was opened leaves the old result as it was: a
+    // config error is found before tracking, a bad line half way is found by the first pass.
+    let out = dir.join("out.txt");
+    std::fs::write(&out, "old result\n").unwrap();
+    let bad = dir.join("bad.txt");
+    std::fs::write(&bad, format!("{text}31,-1,0,0,nan,10,0.9\n")).unwrap();
+    let o = track(&["--det", s(&bad), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "old result\n");
+    // No partial files are left behind.
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".partial"))
+        .collect();
+    assert!(left.is_empty());
+}
+
+#[test]
+fn missing_frames_are_an_error() {
+    let dir = scratch("robust_images");
+    let det = dir.join("det.txt");
+    std::fs::write(&det, walking_boxes(12, 1)).unwrap();
+    let out = dir.join("out.txt");
+    let img = dir.join("img");
+    std::fs::create_dir_all(&img).unwrap();
+    // An empty folder, then fewer images than frames: once appearance silently dropped.
+    let o = track(&["--det", s(&det), "--frames", s(&img), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("holds 0 images"), "{}", stderr(&o));
+    for k in 1..=5 {
+        image::RgbImage::new(640, 480)
+            .save(img.join(format!("{k}.png")))
+            .unwrap();
+    }
+    let o = track(&["--det", s(&det), "--frames", s(&img), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("holds 5 images"), "{}", stderr(&o));
+    // Twelve images named 1.png … 12.png (their order is unit-tested with `natural_cmp`).
+    for k in 6..=12 {
+        image::RgbImage::new(640, 480)
+            .save(img.join(format!("{k}.png")))
+            .unwrap();
+    }
+    let o = track(&["--det", s(&det), "--frames", s(&img), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Peak resident memory the run reported (Linux).
+fn peak_kb(o: &std::process::Output) -> u64 {
+    let text = String::from_utf8_lossy(&o.stdout);
+    let v = text
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("peak_mem_kb="))
+        .unwrap_or_else(|| panic!("no peak memory in {text}"));
+    v.parse().unwrap()
+}
+
+#[test]
+fn memory_stays_flat_over_a_long_video() {
+    let dir = scratch("robust_memory");
+    let mut peaks = Vec::new();
+    for frames in [10_000u32, 40_000] {
+        let det = dir.join(format!("det{frames}.txt"));
+        std::fs::write(&det, walking_boxes(frames, 10)).unwrap();
+        let out = dir.join(format!("out{frames}.txt"));
+        let o = track(&["--det", s(&det), "--out", s(&out)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        peaks.push(peak_kb(&o));
+        let lines = read_text(&out).unwrap().lines().count();
+        assert!(lines as u32 > frames * 9, "{lines}");
+    }
+    // Four times the frames (and the detections file): well within twice the memory.
+    assert!(peaks[1] < 2 * peaks[0], "peak memory {peaks:?} kB");
+}
+
+#[test]
+fn a_frame_of_too_many_detections_is_an_error_that_changes_nothing() {
+    use shapetrack::frame::{BBox, Detection};
+    use shapetrack::track::{Config, TrackError, Tracker, MAX_DETECTIONS};
+    let mut t = Tracker::new(Config::default()).unwrap();
+    let many: Vec<Detection> = (0..=MAX_DETECTIONS)
+        .map(|k| Detection::from_box(BBox::new((k % 100) as f64, 0.0, 50.0, 50.0), 0.9))
+        .collect();
+    let e = t.update(None, &many).unwrap_err();
+    assert!(matches!(e, TrackError::TooManyDetections { .. }), "{e}");
+    assert_eq!(t.frame(), 0);
+    assert!(t.update(None, &many[..10]).is_ok());
 }

@@ -36,7 +36,11 @@ fn records_of(v: Ts<Records>) -> Vec<RecordJs> {
 
 /// Parses `text` as `format` and returns the records as plain structs.
 fn parse(format: &str, text: &str, name: &str) -> Result<Vec<RecordJs>, JsValue> {
-    let a = parse_annotations(ts(JsValue::from_str(format)), text, name)?;
+    let a = parse_annotations(
+        ts(JsValue::from_str(format)),
+        JsValue::from_str(text),
+        JsValue::from_str(name),
+    )?;
     let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
     Ok(serde_json::from_value(v["records"].clone()).unwrap())
 }
@@ -59,7 +63,7 @@ const MOT: &str =
 
 #[wasm_bindgen_test]
 fn frame_buffer_is_rgba_in_wasm_memory() {
-    let buf = FrameBuffer::new(64, 48).unwrap();
+    let buf = FrameBuffer::new(64.0, 48.0).unwrap();
     assert_eq!(buf.len(), 64 * 48 * 4);
     assert_eq!((buf.width(), buf.height()), (64, 48));
     // The pointer must lie inside linear memory so JS can build a view on it.
@@ -75,7 +79,7 @@ fn frame_buffer_is_rgba_in_wasm_memory() {
 #[wasm_bindgen_test]
 fn frame_buffer_rejects_bad_sizes_with_an_error() {
     for (w, h) in [(0, 10), (10, 0), (20000, 10)] {
-        let msg = error_message(FrameBuffer::new(w, h).err().unwrap());
+        let msg = error_message(FrameBuffer::new(f64::from(w), f64::from(h)).err().unwrap());
         assert!(msg.contains(&format!("{w}x{h}")), "{msg}");
     }
 }
@@ -138,7 +142,7 @@ fn masks_round_trip_between_bitmaps_and_rle() {
     for (x, y) in [(2, 1), (3, 1), (3, 2), (5, 4)] {
         full[y * w as usize + x] = 1;
     }
-    let rle = encode_mask(w, h, &full).unwrap();
+    let rle = encode_mask(f64::from(w), f64::from(h), &full).unwrap();
     let rle_v: RleJs = serde_wasm_bindgen::from_value(JsValue::from(rle.clone())).unwrap();
     assert_eq!(rle_v.size, [h, w]);
     let bm = decode_mask(rle).unwrap();
@@ -156,7 +160,11 @@ fn masks_round_trip_between_bitmaps_and_rle() {
         .unwrap();
     assert_eq!((x, width), (2.0, 4.0));
     assert_eq!(data.to_vec().iter().map(|&v| v as u32).sum::<u32>(), 4);
-    let msg = error_message(encode_mask(w, h, &full[1..]).err().unwrap());
+    let msg = error_message(
+        encode_mask(f64::from(w), f64::from(h), &full[1..])
+            .err()
+            .unwrap(),
+    );
     assert!(msg.contains("expected 8x6"), "{msg}");
 }
 
@@ -167,8 +175,10 @@ fn mots_text_round_trips_byte_exact() {
     for i in [9, 10, 17, 18, 30] {
         full[i] = 1;
     }
-    let rle: RleJs =
-        serde_wasm_bindgen::from_value(JsValue::from(encode_mask(w, h, &full).unwrap())).unwrap();
+    let rle: RleJs = serde_wasm_bindgen::from_value(JsValue::from(
+        encode_mask(f64::from(w), f64::from(h), &full).unwrap(),
+    ))
+    .unwrap();
     let line = format!("1 5 2 {h} {w} {}\n", rle.counts);
     let v = parse("mots", &line, "m.txt").unwrap();
     // The box is derived from the mask: columns 1..=6, rows 1..=3.
@@ -191,9 +201,10 @@ fn masked_records() -> Vec<RecordJs> {
                 full[y * w as usize + x0] = 1;
                 full[y * w as usize + x0 + 1] = 1;
             }
-            let rle: RleJs =
-                serde_wasm_bindgen::from_value(JsValue::from(encode_mask(w, h, &full).unwrap()))
-                    .unwrap();
+            let rle: RleJs = serde_wasm_bindgen::from_value(JsValue::from(
+                encode_mask(f64::from(w), f64::from(h), &full).unwrap(),
+            ))
+            .unwrap();
             let row = serde_json::json!({
                 "frame": f, "id": id, "class": 1,
                 "bbox": { "x": x0, "y": 1, "w": 2, "h": 2 }, "mask": rle,
@@ -211,7 +222,12 @@ fn coco_video_and_cvat_round_trip_through_the_core() {
         "labels": [{ "class": 1, "name": "car" }] });
     for format in ["coco-video", "cvat"] {
         let text = write(format, &recs, Some(meta.clone())).unwrap();
-        let a = parse_annotations(ts(JsValue::from_str(format)), &text, "x").unwrap();
+        let a = parse_annotations(
+            ts(JsValue::from_str(format)),
+            JsValue::from_str(&text),
+            JsValue::from_str("x"),
+        )
+        .unwrap();
         let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
         assert_eq!(
             (v["width"].clone(), v["height"].clone()),
@@ -381,23 +397,23 @@ fn synthetic_frames_are_the_same_in_order_and_out_of_order() {
     let mut a = scene("default");
     let mut b = scene("default");
     let (w, h) = (a.width(), a.height());
-    let mut buf_a = FrameBuffer::new(w, h).unwrap();
-    let mut buf_b = FrameBuffer::new(w, h).unwrap();
+    let mut buf_a = FrameBuffer::new(f64::from(w), f64::from(h)).unwrap();
+    let mut buf_b = FrameBuffer::new(f64::from(w), f64::from(h)).unwrap();
     let mut frames = Vec::new();
     for n in 1..=8 {
-        a.render(n, &mut buf_a).unwrap();
+        a.render(f64::from(n), &mut buf_a).unwrap();
         frames.push(pixels(&buf_a));
     }
     // Jump ahead, then back: the scene replays to the frame asked for.
     for n in [7, 3, 8, 1] {
-        let f = b.render(n, &mut buf_b).unwrap();
+        let f = b.render(f64::from(n), &mut buf_b).unwrap();
         assert_eq!(f.index(), n);
         assert!(
             pixels(&buf_b) == frames[n as usize - 1],
             "frame {n} differs"
         );
     }
-    let msg = error_message(b.render(0, &mut buf_b).err().unwrap());
+    let msg = error_message(b.render(0.0, &mut buf_b).err().unwrap());
     assert!(msg.contains("outside 1..=300"), "{msg}");
 }
 
@@ -418,15 +434,15 @@ fn pixels(buf: &FrameBuffer) -> Vec<u8> {
 #[wasm_bindgen_test]
 fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
     let mut s = scene("default");
-    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut buf = FrameBuffer::new(f64::from(s.width()), f64::from(s.height())).unwrap();
     let mut tracker = Tracker::new(None, None).unwrap();
     // Track id per gt object over 40 frames, from the scene's own detections.
     let mut seen: std::collections::BTreeMap<i64, std::collections::BTreeSet<i64>> =
         Default::default();
     for n in 1..=40 {
-        let f = s.render(n, &mut buf).unwrap();
+        let f = s.render(f64::from(n), &mut buf).unwrap();
         let shapes: Vec<serde_json::Value> = serde_wasm_bindgen::from_value(JsValue::from(
-            tracker.update(n, &buf, &f.detections()).unwrap(),
+            tracker.update(f64::from(n), &buf, &f.detections()).unwrap(),
         ))
         .unwrap();
         let gt = records_of(f.ground_truth().unwrap());
@@ -453,12 +469,12 @@ fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
     let all = records_of(tracker.tracks().unwrap());
     assert!(all.iter().all(|r| r.mask.is_some()));
     // Frames go in order.
-    let f = s.render(42, &mut buf).unwrap();
-    let msg = error_message(tracker.update(42, &buf, &f.detections()).err().unwrap());
+    let f = s.render(42.0, &mut buf).unwrap();
+    let msg = error_message(tracker.update(42.0, &buf, &f.detections()).err().unwrap());
     assert!(msg.contains("expected frame 41, got 42"), "{msg}");
     // A frame of another size is refused.
-    let small = FrameBuffer::new(8, 8).unwrap();
-    let msg = error_message(tracker.update(41, &small, &f.detections()).err().unwrap());
+    let small = FrameBuffer::new(8.0, 8.0).unwrap();
+    let msg = error_message(tracker.update(41.0, &small, &f.detections()).err().unwrap());
     assert!(msg.contains("frame size changed"), "{msg}");
 }
 
@@ -492,11 +508,11 @@ fn detections_from_js_lists_are_checked() {
 #[wasm_bindgen_test]
 fn background_detector_finds_the_moving_shapes() {
     let mut s = scene("default");
-    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut buf = FrameBuffer::new(f64::from(s.width()), f64::from(s.height())).unwrap();
     let mut bg = BackgroundDetector::new(None).unwrap();
     let mut found = 0;
     for n in 1..=40 {
-        s.render(n, &mut buf).unwrap();
+        s.render(f64::from(n), &mut buf).unwrap();
         found = bg.detect(&buf).unwrap().len();
     }
     assert!(found >= 3, "{found} detections after the model settled");
@@ -508,11 +524,14 @@ fn background_detector_finds_the_moving_shapes() {
 #[wasm_bindgen_test]
 fn evaluation_scores_perfect_and_broken_results() {
     let mut s = scene("default");
-    let mut buf = FrameBuffer::new(s.width(), s.height()).unwrap();
+    let mut buf = FrameBuffer::new(f64::from(s.width()), f64::from(s.height())).unwrap();
     let mut gt = Vec::new();
     for n in 1..=10 {
         gt.extend(records_of(
-            s.render(n, &mut buf).unwrap().ground_truth().unwrap(),
+            s.render(f64::from(n), &mut buf)
+                .unwrap()
+                .ground_truth()
+                .unwrap(),
         ));
     }
     let scores = |res: &Vec<RecordJs>, opts: serde_json::Value| -> serde_json::Value {
@@ -629,13 +648,13 @@ fn mask_preset_from_js_reidentifies_shapes_after_occlusions() {
     let run = |config: serde_json::Value| {
         let mut s = scene("occlusion");
         let (w, h, frames) = (s.width(), s.height(), s.frames());
-        let mut buf = FrameBuffer::new(w, h).unwrap();
+        let mut buf = FrameBuffer::new(f64::from(w), f64::from(h)).unwrap();
         let mut tracker = Tracker::new(Some(ts(js(&config))), None).unwrap();
         let mut gt = Vec::new();
         for n in 1..=frames {
-            let f = s.render(n, &mut buf).unwrap();
+            let f = s.render(f64::from(n), &mut buf).unwrap();
             gt.extend(records_of(f.ground_truth().unwrap()));
-            tracker.update(n, &buf, &f.detections()).unwrap();
+            tracker.update(f64::from(n), &buf, &f.detections()).unwrap();
         }
         let res = records_of(tracker.tracks().unwrap());
         let opts = serde_json::json!({ "similarity": "mask" });
@@ -665,15 +684,15 @@ fn finish_rejoins_occluded_tracks_and_fills_the_gaps() {
     // scene's own noisy mask detections.
     let mut s = scene("occlusion");
     let (w, h, frames, fps) = (s.width(), s.height(), s.frames(), s.fps());
-    let mut buf = FrameBuffer::new(w, h).unwrap();
+    let mut buf = FrameBuffer::new(f64::from(w), f64::from(h)).unwrap();
     let opts = serde_json::json!({ "fps": fps });
     let mut tracker = Tracker::new(None, Some(ts(js(&opts)))).unwrap();
     assert!(tracker.offline());
     let mut gt = Vec::new();
     for n in 1..=frames {
-        let f = s.render(n, &mut buf).unwrap();
+        let f = s.render(f64::from(n), &mut buf).unwrap();
         gt.extend(records_of(f.ground_truth().unwrap()));
-        tracker.update(n, &buf, &f.detections()).unwrap();
+        tracker.update(f64::from(n), &buf, &f.detections()).unwrap();
     }
     let online = records_of(tracker.tracks().unwrap());
     // Records the online pass coasted over (interpolated) stay as they are; the pass adds
@@ -794,10 +813,10 @@ fn finish_rejoins_occluded_tracks_and_fills_the_gaps() {
     // The tracker is final: tracks() is the result, no frame and no second finish.
     assert!(tracker.finished());
     assert_eq!(records_of(tracker.tracks().unwrap()), records);
-    let f = s.render(1, &mut buf).unwrap();
+    let f = s.render(1.0, &mut buf).unwrap();
     let msg = error_message(
         tracker
-            .update(frames + 1, &buf, &f.detections())
+            .update(f64::from(frames + 1), &buf, &f.detections())
             .err()
             .unwrap(),
     );
@@ -815,7 +834,7 @@ fn broken_track(tracker: &mut Tracker) {
             serde_json::json!([{ "bbox": { "x": 10.0 + 8.0 * n as f64, "y": 50, "w": 30, "h": 60 }, "score": 0.95 }])
         };
         let d = Detections::from_lists(ts(js(&serde_json::json!({ "boxes": boxes })))).unwrap();
-        tracker.update_detections(n, &d).unwrap();
+        tracker.update_detections(f64::from(n), &d).unwrap();
     }
 }
 

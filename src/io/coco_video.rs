@@ -25,12 +25,7 @@ use std::collections::{BTreeMap, BTreeSet};
 /// polygon whose perimeter needs more is rejected rather than exhausting memory.
 const MAX_POLYGON_STEPS: u64 = 1 << 24;
 
-/// Largest image side we accept, as the MOTS reader does.
-const MAX_SIDE: u32 = 1 << 16;
-
-/// Largest image (pixels) we decode masks for: 64 Mpx, far above any video frame, low enough
-/// that a hostile size cannot make us allocate gigabytes.
-const MAX_PIXELS: u64 = 1 << 26;
+use super::limits::{MAX_PIXELS, MAX_SIDE};
 
 /// One video of a COCO-video file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -406,11 +401,16 @@ fn segmentation_rle(ctx: &Ctx, raw: &RawValue, size: Option<(u32, u32)>) -> Resu
                     })
                 }
                 Counts::Uncompressed(c) => {
-                    let total: u64 = c.iter().sum();
-                    if total != h as u64 * w as u64 || c.iter().any(|&x| x > u32::MAX as u64) {
+                    // Checked: counts near 2⁶⁴ must not wrap around to the mask's area.
+                    let total = c.iter().try_fold(0u64, |a, &x| a.checked_add(x));
+                    if total != Some(h as u64 * w as u64) || c.iter().any(|&x| x > u32::MAX as u64)
+                    {
                         return Err(ctx.err_at(
                             raw,
-                            format!("RLE counts cover {total} pixels but the mask is {h}x{w}"),
+                            format!(
+                                "RLE counts cover {} pixels but the mask is {h}x{w}",
+                                total.map_or("more than 2^64".to_string(), |t| t.to_string())
+                            ),
                         ));
                     }
                     Ok(Rle {
@@ -488,10 +488,7 @@ fn track_records(
         let bbox = match bbox {
             Some([x, y, w, h]) => BBox::checked(x, y, w, h)
                 .map_err(|e| ctx.err_at(raw, format!("frame {}: {e}", f + 1)))?,
-            None => mask
-                .as_ref()
-                .map(|m| m.to_mask().bbox())
-                .unwrap_or_default(),
+            None => mask.as_ref().map(|m| m.bbox()).unwrap_or_default(),
         };
         let flag = |l: &Option<Vec<Option<bool>>>| {
             l.as_ref()

@@ -36,9 +36,18 @@ use std::fmt::Write as _;
 /// from exhausting the stack when the tree is dropped.
 const MAX_DEPTH: usize = 64;
 
-/// Largest frame number / task size accepted (about 9 hours at 30 fps): gaps are filled frame
+/// Largest frame number / task size accepted (see [`super::limits`]): gaps are filled frame
 /// by frame, so an absurd frame number must not turn into billions of records.
-const MAX_FRAMES: u32 = 1 << 20;
+const MAX_FRAMES: u32 = super::limits::MAX_FRAME;
+
+use super::limits::{MAX_RECORDS, MAX_TOTAL_RUNS};
+
+/// Shapes and mask runs a file has expanded to so far.
+#[derive(Default)]
+struct Budget {
+    records: u64,
+    runs: u64,
+}
 
 /// Task information of a CVAT file.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -394,11 +403,15 @@ fn parse_shape(ctx: &Ctx, n: &Node, meta: &CvatMeta) -> Result<Shape, IoError> {
                     )
                 })?);
             }
-            let total: u64 = runs.iter().sum();
-            if total != w as u64 * h as u64 {
+            // Checked: run lengths near 2⁶⁴ must not wrap around to the box's area.
+            let total = runs.iter().try_fold(0u64, |a, &r| a.checked_add(r));
+            if total != Some(w as u64 * h as u64) {
                 return Err(ctx.err(
                     n.pos,
-                    format!("mask rle covers {total} pixels but its box is {w}x{h}"),
+                    format!(
+                        "mask rle covers {} pixels but its box is {w}x{h}",
+                        total.map_or("more than 2^64".to_string(), |t| t.to_string())
+                    ),
                 ));
             }
             let mut full = vec![0u8; meta.width as usize * meta.height as usize];
@@ -454,7 +467,7 @@ fn record_of(
             let (y0, y1) = ys.fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
             (BBox::from_xyxy(x0, y0, x1, y1), Some(rle))
         }
-        Geometry::Mask(rle) => (rle.to_mask().bbox(), Some(rle.clone())),
+        Geometry::Mask(rle) => (rle.bbox(), Some(rle.clone())),
     };
     Ok(Record {
         frame: frame + 1,
@@ -495,6 +508,7 @@ pub fn parse_cvat(
     }
     let (meta, mut names) = parse_meta(&ctx, &root)?;
     let mut records = Vec::new();
+    let mut budget = Budget::default();
     let mut ids = std::collections::BTreeSet::new();
     for node in &root.children {
         match node.name.as_str() {
@@ -572,20 +586,51 @@ pub fn parse_cvat(
             // Frames up to the next shape (or the end of the task) that the file leaves out.
             let next = shapes.get(i + 1).map(|(_, n)| n);
             let stop = next.map_or(meta.size.max(s.frame + 1), |n| n.frame);
+            // A few bytes of keyframes may span a million frames: bound what they expand to.
+            let span = (stop - s.frame) as u64;
+            let runs = match &s.geometry {
+                Geometry::Mask(r) => r.counts.len() as u64,
+                Geometry::Polygon(xy) => 2 * meta.width.max(1) as u64 + xy.len() as u64,
+                Geometry::Box(_) => 0,
+            };
+            budget.records += span;
+            budget.runs += span * runs;
+            if budget.records > MAX_RECORDS || budget.runs > MAX_TOTAL_RUNS {
+                return Err(ctx.err(
+                    *pos,
+                    format!(
+                        "the file expands to more than {MAX_RECORDS} shapes or {MAX_TOTAL_RUNS} \
+                         mask runs (keyframes far apart?); split the task"
+                    ),
+                ));
+            }
+            // A held polygon or mask is rasterised once, not once per frame it is held for.
+            let mut held: Option<Record> = None;
             for f in s.frame + 1..stop {
-                let g = match (&s.geometry, next.map(|n| &n.geometry)) {
+                let mut r = match (&s.geometry, next.map(|n| &n.geometry)) {
                     (Geometry::Box(a), Some(Geometry::Box(b))) => {
                         let t = (f - s.frame) as f64 / (stop - s.frame) as f64;
-                        Geometry::Box(BBox::new(
+                        let g = Geometry::Box(BBox::new(
                             a.x + (b.x - a.x) * t,
                             a.y + (b.y - a.y) * t,
                             a.w + (b.w - a.w) * t,
                             a.h + (b.h - a.h) * t,
-                        ))
+                        ));
+                        record_of(&ctx, *pos, f, id, class, &g, &meta)?
                     }
-                    (g, _) => g.clone(),
+                    (g, _) => {
+                        let mut r = match &held {
+                            Some(r) => r.clone(),
+                            None => {
+                                let r = record_of(&ctx, *pos, f, id, class, g, &meta)?;
+                                held = Some(r.clone());
+                                r
+                            }
+                        };
+                        r.frame = f + 1;
+                        r
+                    }
                 };
-                let mut r = record_of(&ctx, *pos, f, id, class, &g, &meta)?;
                 r.flags = RecordFlags {
                     interpolated: true,
                     occluded: s.occluded,

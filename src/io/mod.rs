@@ -10,6 +10,7 @@
 pub mod coco_video;
 pub mod cvat;
 pub mod layout;
+pub mod limits;
 pub mod motchallenge;
 pub mod png_masks;
 pub mod rle;
@@ -148,11 +149,101 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
 }
 
 /// Writes a whole text file, naming the file in the error.
+///
+/// The text goes to a temporary file beside `path` that is renamed over it once complete, so
+/// a failed write (disk full, a killed process) leaves the old file as it was.
 pub fn write_text(path: &std::path::Path, text: &str) -> Result<(), IoError> {
-    std::fs::write(path, text).map_err(|source| IoError::Io {
+    use std::io::Write as _;
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(text.as_bytes()).map_err(|source| IoError::Io {
         file: path.display().to_string(),
         source,
-    })
+    })?;
+    f.commit()
+}
+
+/// A file written in full or not at all: writes go to a temporary file beside the target
+/// (same folder, so the rename stays on one file system), [`AtomicFile::commit`] renames it
+/// into place, and dropping it uncommitted deletes the temporary file. An existing file at the
+/// target keeps its contents until the commit.
+#[derive(Debug)]
+pub struct AtomicFile {
+    target: std::path::PathBuf,
+    temp: std::path::PathBuf,
+    out: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl AtomicFile {
+    /// Opens a temporary file for `target`.
+    pub fn create(target: &std::path::Path) -> Result<Self, IoError> {
+        let name = target
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .ok_or_else(|| IoError::Invalid {
+                file: target.display().to_string(),
+                line: 0,
+                message: "not a file name".to_string(),
+            })?;
+        // Unique per process and per call: two writers never share a temporary file.
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        #[cfg(not(target_arch = "wasm32"))]
+        let pid = std::process::id();
+        #[cfg(target_arch = "wasm32")]
+        let pid = 0;
+        let temp = target.with_file_name(format!(".{name}.{pid}.{k}.partial"));
+        let f = std::fs::File::create(&temp).map_err(|source| IoError::Io {
+            file: temp.display().to_string(),
+            source,
+        })?;
+        Ok(Self {
+            target: target.to_path_buf(),
+            temp,
+            out: Some(std::io::BufWriter::new(f)),
+        })
+    }
+
+    /// Flushes, syncs and renames the temporary file over the target.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        let err = |source| IoError::Io {
+            file: self.target.display().to_string(),
+            source,
+        };
+        let Some(out) = self.out.take() else {
+            return Ok(());
+        };
+        {
+            // Closed before the rename (some systems refuse to rename an open file).
+            let f = out.into_inner().map_err(|e| err(e.into_error()))?;
+            f.sync_all().map_err(err)?;
+        }
+        std::fs::rename(&self.temp, &self.target).map_err(err)
+    }
+}
+
+impl std::io::Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.out.as_mut() {
+            Some(o) => o.write(buf),
+            None => Err(std::io::Error::other("file already committed")),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self.out.as_mut() {
+            Some(o) => o.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.out.take().is_some() {
+            // Not committed: the target keeps its old contents; the partial file goes.
+            let _ = std::fs::remove_file(&self.temp);
+        }
+    }
 }
 
 /// Per-record flags that only some formats can express.

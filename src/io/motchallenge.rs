@@ -5,6 +5,7 @@
 //! TrackEval we accept commas or whitespace as separators, CRLF, blank lines and extra fields.
 //! MOTS lines are `frame id class height width rle` with a pycocotools-compressed RLE.
 
+use super::limits::{image_size_ok, MAX_FRAME, MAX_PIXELS, MAX_SIDE};
 use super::{IoError, Record, RecordFlags, Rle};
 use crate::frame::BBox;
 use std::fmt::Write as _;
@@ -80,10 +81,25 @@ pub fn parse_mot_with(
 ) -> Result<Vec<Record>, IoError> {
     let mut out = Vec::new();
     for (i, raw) in text.lines().enumerate() {
-        let ln = i + 1;
+        if let Some(r) = parse_mot_line(raw, file, i + 1, opts)? {
+            out.push(r);
+        }
+    }
+    Ok(out)
+}
+
+/// One line of a MOTChallenge txt file (`ln` is its 1-based number, for errors): `None` for a
+/// blank line. What [`parse_mot_with`] does per line, for readers that stream.
+pub fn parse_mot_line(
+    raw: &str,
+    file: &str,
+    ln: usize,
+    opts: MotReadOptions,
+) -> Result<Option<Record>, IoError> {
+    {
         let line = raw.trim_end_matches('\r').trim();
         if line.is_empty() {
-            continue;
+            return Ok(None);
         }
         let f = fields(line);
         if f.len() < 6 {
@@ -97,8 +113,14 @@ pub fn parse_mot_with(
         }
         let frame = int(file, ln, 1, f[0], "frame number")?;
         let first = if opts.allow_frame_zero { 0 } else { 1 };
-        if frame < first || frame > u32::MAX as i64 {
-            return Err(IoError::parse(file, ln, 1, "frame number ≥ 1", f[0]));
+        if frame < first || frame > MAX_FRAME as i64 {
+            return Err(IoError::parse(
+                file,
+                ln,
+                1,
+                format!("frame number in {first}..={MAX_FRAME} (the readers' cap)"),
+                f[0],
+            ));
         }
         let id = int(file, ln, 2, f[1], "track id")?;
         let x = num(file, ln, 3, f[2], "box left")?;
@@ -123,7 +145,7 @@ pub fn parse_mot_with(
             Some(s) => num(file, ln, 9, s, "visibility")?,
             None => -1.0,
         };
-        out.push(Record {
+        Ok(Some(Record {
             frame: frame as u32,
             id,
             bbox: BBox::new(x, y, w, h),
@@ -132,9 +154,8 @@ pub fn parse_mot_with(
             visibility,
             mask: None,
             flags: RecordFlags::default(),
-        });
+        }))
     }
-    Ok(out)
 }
 
 /// Writes records as MOTChallenge txt, `frame,id,x,y,w,h,conf,-1,-1,-1` per line, sorted by
@@ -169,10 +190,20 @@ pub fn write_mot(records: &[Record]) -> String {
 pub fn parse_mots(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
     let mut out = Vec::new();
     for (i, raw) in text.lines().enumerate() {
-        let ln = i + 1;
+        if let Some(r) = parse_mots_line(raw, file, i + 1)? {
+            out.push(r);
+        }
+    }
+    Ok(out)
+}
+
+/// One line of a MOTS txt file (`ln` is its 1-based number, for errors): `None` for a blank
+/// line. What [`parse_mots`] does per line, for readers that stream.
+pub fn parse_mots_line(raw: &str, file: &str, ln: usize) -> Result<Option<Record>, IoError> {
+    {
         let line = raw.trim_end_matches('\r').trim();
         if line.is_empty() {
-            continue;
+            return Ok(None);
         }
         let f: Vec<&str> = line.split_whitespace().collect();
         if f.len() < 6 {
@@ -185,8 +216,14 @@ pub fn parse_mots(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
             ));
         }
         let frame = int(file, ln, 1, f[0], "frame number")?;
-        if frame < 0 || frame > u32::MAX as i64 - 1 {
-            return Err(IoError::parse(file, ln, 1, "frame number ≥ 0", f[0]));
+        if !(0..=MAX_FRAME as i64).contains(&frame) {
+            return Err(IoError::parse(
+                file,
+                ln,
+                1,
+                format!("frame number in 0..={MAX_FRAME} (the readers' cap)"),
+                f[0],
+            ));
         }
         let id = int(file, ln, 2, f[1], "object id")?;
         let class = int(file, ln, 3, f[2], "class id")? as i32;
@@ -210,16 +247,25 @@ pub fn parse_mots(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
                 f[4],
             ));
         }
+        if !image_size_ok(w as u64, h as u64) {
+            return Err(IoError::parse(
+                file,
+                ln,
+                4,
+                format!("image of at most {MAX_PIXELS} pixels (the readers' cap)"),
+                &format!("{h} {w}"),
+            ));
+        }
         let rle =
             Rle::from_compressed(f[5], h as u32, w as u32).map_err(|source| IoError::Rle {
                 file: file.to_string(),
                 line: ln,
                 source,
             })?;
-        let bbox = rle.to_mask().bbox();
+        let bbox = rle.bbox();
         // MOTS frames are 0-based in KITTI-MOTS but 1-based in MOTS20; keep what the file says
         // (frame 0 is stored as 0 and callers that need 1-based frames shift it).
-        out.push(Record {
+        Ok(Some(Record {
             frame: frame as u32,
             id,
             bbox,
@@ -228,9 +274,8 @@ pub fn parse_mots(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
             visibility: -1.0,
             mask: Some(rle),
             flags: RecordFlags::default(),
-        });
+        }))
     }
-    Ok(out)
 }
 
 /// Writes records that carry masks as MOTS txt, sorted by frame then id. Records without a
@@ -308,6 +353,44 @@ impl SeqInfo {
                 IoError::parse(file, ln, k.len() + 2, format!("{k} as a whole number"), &v)
             })
         };
+        // Counts a few bytes can declare but that decide what is allocated: capped.
+        let capped = |k: &str, max: u32| -> Result<u32, IoError> {
+            let v = parse_u32(k)?;
+            if v > max {
+                let (ln, text) = req(k)?;
+                return Err(IoError::parse(
+                    file,
+                    ln,
+                    k.len() + 2,
+                    format!("{k} ≤ {max} (the readers' cap)"),
+                    &text,
+                ));
+            }
+            Ok(v)
+        };
+        // The image size is optional, but when given it must be one.
+        let (im_width, im_height) = match (
+            get.contains_key("imwidth"),
+            get.contains_key("imheight"),
+        ) {
+            (false, false) => (0, 0),
+            _ => {
+                let (w, h) = (parse_u32("imWidth")?, parse_u32("imHeight")?);
+                if !image_size_ok(w as u64, h as u64) {
+                    let (ln, text) = req("imWidth")?;
+                    return Err(IoError::parse(
+                        file,
+                        ln,
+                        9,
+                        format!(
+                            "imWidth × imHeight ≥ 1 × 1, sides ≤ {MAX_SIDE}, at most {MAX_PIXELS} pixels"
+                        ),
+                        &format!("{text} × {h}"),
+                    ));
+                }
+                (w, h)
+            }
+        };
         let (fr_ln, fr) = req("frameRate")?;
         let frame_rate = fr
             .parse::<f64>()
@@ -318,9 +401,9 @@ impl SeqInfo {
             name: req("name").map(|v| v.1).unwrap_or_default(),
             im_dir: req("imDir").map(|v| v.1).unwrap_or_else(|_| "img1".into()),
             frame_rate,
-            seq_length: parse_u32("seqLength")?,
-            im_width: parse_u32("imWidth").unwrap_or(0),
-            im_height: parse_u32("imHeight").unwrap_or(0),
+            seq_length: capped("seqLength", MAX_FRAME)?,
+            im_width,
+            im_height,
             im_ext: req("imExt").map(|v| v.1).unwrap_or_else(|_| ".jpg".into()),
         })
     }

@@ -96,7 +96,7 @@ fn record_of(frame: u32, id: i64, rle: Rle) -> Record {
     Record {
         frame,
         id,
-        bbox: rle.to_mask().bbox(),
+        bbox: rle.bbox(),
         score: 1.0,
         class: -1,
         visibility: -1.0,

@@ -59,7 +59,7 @@ pub struct Rle {
 impl Rle {
     /// Encodes a row-major full-image bitmap (`width·height` bytes, non-zero = foreground).
     pub fn encode(width: u32, height: u32, bitmap: &[u8]) -> Result<Rle, FrameError> {
-        let expected = width as usize * height as usize;
+        let expected = crate::frame::pixel_count(width, height);
         if bitmap.len() != expected {
             return Err(FrameError::MaskSize {
                 len: bitmap.len(),
@@ -159,16 +159,14 @@ impl Rle {
         out
     }
 
-    /// Decodes to a [`Mask`] cropped to its foreground, without a full-image bitmap: the web
-    /// app decodes every shape of every frame it draws, and a 1280×720 scratch image per shape
-    /// would cost more than the drawing. O(runs + mask area).
-    pub fn to_mask(&self) -> Mask {
+    /// The foreground's bounding rectangle `(x0, y0, x1, y1)` (inclusive pixel indices), from
+    /// the runs alone; `None` when the mask is empty. O(runs), no bitmap.
+    fn fg_rect(&self) -> Option<(u64, u64, u64, u64)> {
         let h = self.height as u64;
         if h == 0 || self.width == 0 {
-            return Mask::empty();
+            return None;
         }
         let total = h * self.width as u64;
-        // Pass 1: the foreground's bounding rectangle, from the runs alone.
         let (mut x0, mut y0, mut x1, mut y1) = (u64::MAX, u64::MAX, 0u64, 0u64);
         let mut pos = 0u64;
         for (i, &c) in self.counts.iter().enumerate() {
@@ -189,9 +187,32 @@ impl Rle {
             }
             pos = end;
         }
-        if x0 == u64::MAX {
-            return Mask::empty();
+        (x0 != u64::MAX).then_some((x0, y0, x1, y1))
+    }
+
+    /// The foreground's tight box (empty box for an empty mask), like `to_mask().bbox()`
+    /// but without decoding: a hostile size costs nothing.
+    pub fn bbox(&self) -> crate::frame::BBox {
+        match self.fg_rect() {
+            Some((x0, y0, x1, y1)) => crate::frame::BBox::new(
+                x0 as f64,
+                y0 as f64,
+                (x1 - x0 + 1) as f64,
+                (y1 - y0 + 1) as f64,
+            ),
+            None => Mask::empty().bbox(),
         }
+    }
+
+    /// Decodes to a [`Mask`] cropped to its foreground, without a full-image bitmap: the web
+    /// app decodes every shape of every frame it draws, and a 1280×720 scratch image per shape
+    /// would cost more than the drawing. O(runs + mask area).
+    pub fn to_mask(&self) -> Mask {
+        let h = self.height as u64;
+        let Some((x0, y0, x1, y1)) = self.fg_rect() else {
+            return Mask::empty();
+        };
+        let total = h * self.width as u64;
         let (w, hh) = (x1 - x0 + 1, y1 - y0 + 1);
         let mut data = vec![0u8; (w * hh) as usize];
         // Pass 2: fill the runs, column by column (inside the rectangle by construction).

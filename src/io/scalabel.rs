@@ -355,7 +355,7 @@ fn label_from_raw(
     let all: Map<String, Value> =
         serde_json::from_str(raw.get()).map_err(|e| json_err(ctx.file, e))?;
     let bbox = match (&rle, bbox) {
-        (Some(r), None) if r.area() > 0 => Some(r.to_mask().bbox()),
+        (Some(r), None) if r.area() > 0 => Some(r.bbox()),
         (_, b) => b,
     };
     Ok(ScalabelLabel {

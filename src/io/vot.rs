@@ -14,6 +14,7 @@
 //! fine. `anchor.value` files (one number a line: > 0 forward anchor, < 0 backward) are read
 //! by [`parse_anchor_values`].
 
+use super::limits::MAX_TOTAL_PIXELS;
 use super::{IoError, Rle};
 use crate::frame::{BBox, Mask, Point};
 use std::fmt::Write as _;
@@ -101,6 +102,17 @@ fn split_values(s: &str) -> Vec<&str> {
 
 /// Parses one region line. `file` and `line` are for errors.
 pub fn parse_region(text: &str, file: &str, line: usize) -> Result<Region, IoError> {
+    parse_region_counted(text, file, line, &mut 0)
+}
+
+/// [`parse_region`], adding the mask pixels it decodes to `decoded` and refusing to go past
+/// [`MAX_TOTAL_PIXELS`] (a file of many huge masks).
+fn parse_region_counted(
+    text: &str,
+    file: &str,
+    line: usize,
+    decoded: &mut u64,
+) -> Result<Region, IoError> {
     let s = text.trim();
     if s.is_empty() {
         return Err(IoError::parse(file, line, 1, "a region", s));
@@ -145,11 +157,13 @@ pub fn parse_region(text: &str, file: &str, line: usize) -> Result<Region, IoErr
                 s,
             ));
         }
-        let total = (w * h) as usize;
-        let mut data = vec![0u8; total];
-        let mut p = 0usize;
+        let total = w * h;
+        // Pass 1: check the runs and find the foreground's rows and columns (row-major), so
+        // only the foreground's box is allocated: `m0,0,8192,8192,0,1` is one pixel, not 64 MB.
+        let (mut c0, mut r0, mut c1, mut r1) = (i64::MAX, i64::MAX, -1i64, -1i64);
+        let mut p = 0i64;
         for (i, &r) in ints[4..].iter().enumerate() {
-            if r < 0 || p + r as usize > total {
+            if r < 0 || r > total - p {
                 return Err(IoError::parse(
                     file,
                     line,
@@ -158,12 +172,50 @@ pub fn parse_region(text: &str, file: &str, line: usize) -> Result<Region, IoErr
                     &r.to_string(),
                 ));
             }
-            if i % 2 == 1 {
-                data[p..p + r as usize].fill(1);
+            if i % 2 == 1 && r > 0 {
+                let (ra, rb) = (p / w, (p + r - 1) / w);
+                r0 = r0.min(ra);
+                r1 = r1.max(rb);
+                if rb > ra {
+                    (c0, c1) = (0, w - 1);
+                } else {
+                    c0 = c0.min(p % w);
+                    c1 = c1.max((p + r - 1) % w);
+                }
             }
-            p += r as usize;
+            p += r;
         }
-        let m = Mask::new(x, y, w as u32, h as u32, data).map_err(|e| IoError::Invalid {
+        if r1 < 0 {
+            return Ok(Region::Mask(Mask::empty()));
+        }
+        let (bw, bh) = (c1 - c0 + 1, r1 - r0 + 1);
+        *decoded += (bw * bh) as u64;
+        if *decoded > MAX_TOTAL_PIXELS {
+            return Err(IoError::parse(
+                file,
+                line,
+                5,
+                format!(
+                    "masks of at most {MAX_TOTAL_PIXELS} pixels in one file (the readers' cap)"
+                ),
+                &format!("{bw}x{bh}"),
+            ));
+        }
+        let mut data = vec![0u8; (bw * bh) as usize];
+        let mut p = 0i64;
+        for (i, &r) in ints[4..].iter().enumerate() {
+            if i % 2 == 1 {
+                for q in p..p + r {
+                    let (row, col) = (q / w - r0, q % w - c0);
+                    if let Some(v) = data.get_mut((row * bw + col) as usize) {
+                        *v = 1;
+                    }
+                }
+            }
+            p += r;
+        }
+        let (x, y) = (x.saturating_add(c0 as i32), y.saturating_add(r0 as i32));
+        let m = Mask::new(x, y, bw as u32, bh as u32, data).map_err(|e| IoError::Invalid {
             file: file.to_string(),
             line,
             message: e.to_string(),
@@ -176,8 +228,10 @@ pub fn parse_region(text: &str, file: &str, line: usize) -> Result<Region, IoErr
         let n: f64 = v
             .parse()
             .map_err(|_| IoError::parse(file, line, i + 1, "a number", v))?;
-        if n.is_infinite() {
-            return Err(IoError::parse(file, line, i + 1, "a finite number", v));
+        // Beyond ±1e9 px a coordinate is nonsense, and areas of such polygons overflow to
+        // infinity (an accuracy of NaN); NaN itself is VOT's "target absent".
+        if n.is_infinite() || n.abs() > 1e9 {
+            return Err(IoError::parse(file, line, i + 1, "a number within ±1e9", v));
         }
         nums.push(n);
     }
@@ -216,9 +270,10 @@ pub fn parse_regions(text: &str, file: &str) -> Result<Vec<Region>, IoError> {
     if body.is_empty() {
         return Ok(Vec::new());
     }
+    let mut decoded = 0u64;
     body.split('\n')
         .enumerate()
-        .map(|(i, l)| parse_region(l.trim_end_matches('\r'), file, i + 1))
+        .map(|(i, l)| parse_region_counted(l.trim_end_matches('\r'), file, i + 1, &mut decoded))
         .collect()
 }
 

@@ -646,7 +646,9 @@ impl Config {
 
     /// Reads a config from JSON; missing fields take their defaults, unknown fields are errors.
     pub fn from_json(text: &str) -> Result<Config, serde_json::Error> {
-        serde_json::from_str(text)
+        let v: serde_json::Value = serde_json::from_str(text)?;
+        check_shape(&v, &serde_json::to_value(Config::default())?, "config")?;
+        serde_json::from_value(v)
     }
 
     /// This config with the fields a JSON object names replaced, nested objects merged field
@@ -670,6 +672,7 @@ impl Config {
             }
         }
         let mut value = serde_json::to_value(self)?;
+        check_shape(patch, &value, "config")?;
         merge(&mut value, patch);
         serde_json::from_value(value)
     }
@@ -680,9 +683,62 @@ impl Config {
     }
 }
 
+/// Checks that `v` has objects wherever `template` (a serialised config) has them: serde
+/// would otherwise read a JSON array into a struct field by field (`[1, 2, 3]` silently
+/// setting the first three fields). `path` names the place in errors. Where the template
+/// holds `null` (an optional section that is off) anything goes; the types are serde's to
+/// check.
+pub fn check_shape(
+    v: &serde_json::Value,
+    template: &serde_json::Value,
+    path: &str,
+) -> Result<(), serde_json::Error> {
+    use serde::de::Error as _;
+    use serde_json::Value;
+    match (template, v) {
+        (Value::Object(t), Value::Object(o)) => {
+            for (k, x) in o {
+                if let Some(tk) = t.get(k) {
+                    check_shape(x, tk, &format!("{path}.{k}"))?;
+                }
+            }
+            Ok(())
+        }
+        (Value::Object(_), Value::Null) if path != "config" => Ok(()),
+        (Value::Object(_), other) => Err(serde_json::Error::custom(format!(
+            "{path} must be a JSON object, not {}",
+            match other {
+                Value::Array(_) => "an array",
+                Value::String(_) => "a string",
+                Value::Number(_) => "a number",
+                Value::Bool(_) => "a boolean",
+                Value::Null => "null",
+                Value::Object(_) => "an object",
+            }
+        ))),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arrays_are_not_read_into_structs() {
+        let base = Config::default();
+        let e = base.overlay_json("[1, 2, 3]").unwrap_err().to_string();
+        assert!(e.contains("config must be a JSON object"), "{e}");
+        let e = base
+            .overlay_json(r#"{"motion": [0.1, 0.2, 0.3]}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("config.motion must be a JSON object"), "{e}");
+        assert!(Config::from_json("[5, 1]").is_err());
+        assert!(base
+            .overlay_json(r#"{"motion": {"std_measurement": 0.2}}"#)
+            .is_ok());
+    }
 
     #[test]
     fn default_is_valid_and_roundtrips() {

@@ -71,6 +71,13 @@ use crate::assign::AssignError;
 use crate::motion::MotionError;
 use thiserror::Error;
 
+/// Most detections one frame may hold. Candidate pairs grow with tracks × detections when
+/// everything overlaps (10,000 stacked boxes took 11 GB before pairs were capped per track,
+/// see [`regions::MAX_CANDIDATES`]); no detector emits that many objects per frame (YOLO's
+/// `max_det` is 300, a MOT20 frame holds ~250 people), and a frame beyond this cap is an
+/// error, not a stall.
+pub const MAX_DETECTIONS: usize = 2_000;
+
 /// Errors raised by the tracker.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum TrackError {
@@ -85,6 +92,16 @@ pub enum TrackError {
         value: f64,
         /// What was expected.
         expected: &'static str,
+    },
+    /// More detections in one frame than the tracker takes ([`MAX_DETECTIONS`]).
+    #[error(
+        "{count} detections in one frame; at most {max} are tracked (filter them by score first)"
+    )]
+    TooManyDetections {
+        /// Detections given.
+        count: usize,
+        /// The cap.
+        max: usize,
     },
     /// A configuration value is out of range.
     #[error("config: {field} = {value}: {reason}")]

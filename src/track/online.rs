@@ -230,6 +230,19 @@ impl Tracker {
         self.frame
     }
 
+    /// Skips `n` frames without detections while the tracker has no live track: nothing can
+    /// change then but the frame count, so a long empty stretch (a sequence whose declared
+    /// length runs far past its detections) costs nothing. Returns how many frames were
+    /// skipped: `n` when there is no live track, else 0 (the caller updates frame by frame).
+    pub fn skip_idle(&mut self, n: u32) -> u32 {
+        if !self.tracks.is_empty() {
+            return 0;
+        }
+        let n = n.min(u32::MAX - self.frame);
+        self.frame += n;
+        n
+    }
+
     /// Number of ids handed out so far.
     pub fn ids_issued(&self) -> u64 {
         self.next_id - 1

@@ -39,6 +39,12 @@ impl Prepared<'_> {
 
 /// Checks every detection: finite boxes within ±[`MAX_COORDINATE`], sizes ≥ 0, finite scores.
 pub(crate) fn validate(detections: &[Detection]) -> Result<(), TrackError> {
+    if detections.len() > super::MAX_DETECTIONS {
+        return Err(TrackError::TooManyDetections {
+            count: detections.len(),
+            max: super::MAX_DETECTIONS,
+        });
+    }
     for (index, det) in detections.iter().enumerate() {
         let b = det.bbox;
         for (field, value) in [

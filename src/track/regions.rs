@@ -11,6 +11,8 @@
 //! convex shells (converted with `Regions::from`); the tracker only depends on [`Regions`].
 
 use crate::frame::BBox;
+use crate::region::cap_candidates;
+pub use crate::region::MAX_CANDIDATES;
 
 /// A region cluster: tracks and detections connected through intersecting shells.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -83,17 +85,22 @@ pub fn estimate_regions(track_shells: &[BBox], det_shells: &[BBox]) -> Regions {
     let widest = order.iter().map(|&i| det_shells[i].w).fold(0.0, f64::max);
 
     let mut pairs = Vec::new();
+    let mut cands = Vec::new();
     for (ti, t) in track_shells.iter().enumerate() {
         if !t.is_valid() {
             continue;
         }
         let lo = lefts.partition_point(|&x| x < t.x - widest);
         let hi = lefts.partition_point(|&x| x < t.x2());
-        for &di in &order[lo..hi.max(lo)] {
-            if meets(t, &det_shells[di]) {
-                pairs.push((ti, di));
-            }
-        }
+        cands.clear();
+        cands.extend(
+            order[lo..hi.max(lo)]
+                .iter()
+                .copied()
+                .filter(|&di| meets(t, &det_shells[di])),
+        );
+        cap_candidates(&mut cands, t.center(), |i| det_shells[i].center());
+        pairs.extend(cands.iter().map(|&di| (ti, di)));
     }
     pairs.sort_unstable();
 
@@ -184,6 +191,18 @@ mod tests {
                 prop_assert!(r.clusters[k].dets.contains(&di));
             }
         }
+    }
+
+    #[test]
+    fn a_track_meets_at_most_the_nearest_candidates() {
+        let t = [BBox::new(0.0, 0.0, 1000.0, 1000.0)];
+        let d: Vec<BBox> = (0..200)
+            .map(|k| BBox::new(500.0 + k as f64, 500.0, 10.0, 10.0))
+            .collect();
+        let r = estimate_regions(&t, &d);
+        assert_eq!(r.pairs.len(), MAX_CANDIDATES);
+        // The nearest to the track's centre (500, 500): detection centres 505, 506, ….
+        assert!(r.pairs.iter().all(|&(_, j)| j < MAX_CANDIDATES));
     }
 
     #[test]

@@ -92,7 +92,9 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let p = |v: &str| {
         v.trim()
             .parse::<u32>()
-            .map_err(|_| format!("--size {s:?}: expected WxH"))
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("--size {s:?}: expected WxH with positive whole numbers"))
     };
     Ok((p(w)?, p(h)?))
 }
@@ -257,4 +259,16 @@ pub fn run(args: Args) -> crate::CliResult {
         shapetrack::io::write_text(p, &serde_json::to_string_pretty(&report)?)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn size_must_be_positive() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        assert!(parse_size("0x0").is_err());
+        assert!(parse_size("640x").is_err());
+    }
 }

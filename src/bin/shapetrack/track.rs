@@ -12,9 +12,12 @@
 use shapetrack::frame::{Frame, Mask, TrackedShape};
 use shapetrack::io::coco_video::{write_coco_video, Category, VideoInfo};
 use shapetrack::io::cvat::{write_cvat, CvatMeta};
-use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mot, write_mots, SeqInfo};
+use shapetrack::io::motchallenge::{
+    parse_mot, parse_mot_line, parse_mots, parse_mots_line, write_mot, write_mots, MotReadOptions,
+    SeqInfo,
+};
 use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, write_scalabel, Categories};
-use shapetrack::io::{read_text, write_text, IoError, Record};
+use shapetrack::io::{read_text, write_text, AtomicFile, IoError, Record};
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase};
 use shapetrack::track::{detections_by_frame, to_records, Config, Tracker};
 use std::collections::BTreeMap;
@@ -141,7 +144,8 @@ fn scalabel_detections(
     Ok((name, records, cats))
 }
 
-/// The image files of a folder, sorted by name (MOTChallenge names them by frame number).
+/// The image files of a folder in natural order (`2.png` before `10.png`; MOTChallenge's
+/// zero-padded names sort the same either way).
 fn list_images(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
     let rd = std::fs::read_dir(dir).map_err(|source| IoError::Io {
         file: dir.display().to_string(),
@@ -155,8 +159,46 @@ fn list_images(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
                 .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "jpg" | "jpeg" | "png"))
         })
         .collect();
-    files.sort();
+    files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     Ok(files)
+}
+
+/// Compares names as people number files: runs of digits by value, the rest by character.
+pub(crate) fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    fn chunks(s: &str) -> Vec<(bool, &str)> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        let mut digit = None;
+        for (i, c) in s.char_indices() {
+            let d = c.is_ascii_digit();
+            if digit.is_some_and(|p| p != d) {
+                out.push((digit.unwrap_or(false), &s[start..i]));
+                start = i;
+            }
+            digit = Some(d);
+        }
+        if start < s.len() {
+            out.push((digit.unwrap_or(false), &s[start..]));
+        }
+        out
+    }
+    let (ca, cb) = (chunks(a), chunks(b));
+    for ((da, x), (db, y)) in ca.iter().zip(cb.iter()) {
+        let o = if *da && *db {
+            let (tx, ty) = (x.trim_start_matches('0'), y.trim_start_matches('0'));
+            tx.len()
+                .cmp(&ty.len())
+                .then_with(|| tx.cmp(ty))
+                .then_with(|| x.len().cmp(&y.len()))
+        } else {
+            x.cmp(y)
+        };
+        if o != Ordering::Equal {
+            return o;
+        }
+    }
+    ca.len().cmp(&cb.len())
 }
 
 fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
@@ -168,16 +210,341 @@ fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
         })
 }
 
+/// What a first pass over a MOT/MOTS text file found, without keeping its records.
+struct Scan {
+    /// Whether frame numbers never decrease from line to line (then the tracker reads the
+    /// file again line by line while it runs, and memory stays flat over any length).
+    sorted: bool,
+    records: usize,
+    first_frame: Option<u32>,
+    last_frame: u32,
+    /// The image size of the first mask (MOTS).
+    mask_size: Option<(u32, u32)>,
+}
+
+fn open_lines(path: &Path) -> Result<std::io::Lines<std::io::BufReader<std::fs::File>>, IoError> {
+    use std::io::BufRead as _;
+    let f = std::fs::File::open(path).map_err(|source| IoError::Io {
+        file: path.display().to_string(),
+        source,
+    })?;
+    Ok(std::io::BufReader::new(f).lines())
+}
+
+/// Reads line `ln` of a text detection file (I/O errors name the file).
+fn line_of(line: Option<std::io::Result<String>>, path: &Path) -> Result<Option<String>, IoError> {
+    line.transpose().map_err(|source| IoError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+fn parse_line(raw: &str, file: &str, ln: usize, mots: bool) -> Result<Option<Record>, IoError> {
+    if mots {
+        parse_mots_line(raw, file, ln)
+    } else {
+        parse_mot_line(raw, file, ln, MotReadOptions::default())
+    }
+}
+
+/// Checks every line of a MOT/MOTS file (so a bad line fails before anything is written) and
+/// notes what the run needs to know up front.
+fn scan(path: &Path, mots: bool, image_size: Option<(u32, u32)>) -> Result<Scan, IoError> {
+    let file = path.display().to_string();
+    let mut lines = open_lines(path)?;
+    let mut scan = Scan {
+        sorted: true,
+        records: 0,
+        first_frame: None,
+        last_frame: 0,
+        mask_size: None,
+    };
+    let mut prev = 0u32;
+    let mut ln = 0usize;
+    while let Some(raw) = line_of(lines.next(), path)? {
+        ln += 1;
+        let Some(r) = parse_line(&raw, &file, ln, mots)? else {
+            continue;
+        };
+        check_mask_size(&r, image_size, &file, ln)?;
+        if scan.records > 0 && r.frame < prev {
+            scan.sorted = false;
+        }
+        prev = r.frame;
+        scan.records += 1;
+        scan.first_frame = Some(scan.first_frame.map_or(r.frame, |f| f.min(r.frame)));
+        scan.last_frame = scan.last_frame.max(r.frame);
+        if scan.mask_size.is_none() {
+            scan.mask_size = r.mask.as_ref().map(|m| (m.width, m.height));
+        }
+    }
+    Ok(scan)
+}
+
+/// A mask must be of the frame it belongs to (the seqinfo's size when given).
+fn check_mask_size(
+    r: &Record,
+    image_size: Option<(u32, u32)>,
+    file: &str,
+    line: usize,
+) -> Result<(), IoError> {
+    if let (Some(m), Some((w, h))) = (&r.mask, image_size) {
+        if (m.width, m.height) != (w, h) {
+            return Err(IoError::Invalid {
+                file: file.to_string(),
+                line,
+                message: format!(
+                    "a {}x{} mask in a {w}x{h} video (seqinfo): masks must be of the frame's size",
+                    m.width, m.height
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The detections, one frame's records at a time, in frame order.
+enum Groups {
+    /// Held in memory, sorted by frame (Scalabel JSON, or a text file not sorted by frame).
+    Loaded { records: Vec<Record>, at: usize },
+    /// A text file sorted by frame, read line by line.
+    Stream {
+        lines: std::io::Lines<std::io::BufReader<std::fs::File>>,
+        path: PathBuf,
+        mots: bool,
+        ln: usize,
+        pending: Option<Record>,
+    },
+}
+
+impl Groups {
+    fn loaded(mut records: Vec<Record>) -> Self {
+        records.sort_by_key(|r| r.frame);
+        Groups::Loaded { records, at: 0 }
+    }
+
+    /// The next frame's number and records.
+    fn next_group(&mut self) -> Result<Option<(u32, Vec<Record>)>, IoError> {
+        match self {
+            Groups::Loaded { records, at } => {
+                let Some(first) = records.get(*at) else {
+                    return Ok(None);
+                };
+                let frame = first.frame;
+                let end = records[*at..]
+                    .iter()
+                    .position(|r| r.frame != frame)
+                    .map_or(records.len(), |k| *at + k);
+                let group = records[*at..end].to_vec();
+                *at = end;
+                Ok(Some((frame, group)))
+            }
+            Groups::Stream {
+                lines,
+                path,
+                mots,
+                ln,
+                pending,
+            } => {
+                let file = path.display().to_string();
+                let mut group: Vec<Record> = pending.take().into_iter().collect();
+                while let Some(raw) = line_of(lines.next(), path)? {
+                    *ln += 1;
+                    let Some(r) = parse_line(&raw, &file, *ln, *mots)? else {
+                        continue;
+                    };
+                    match group.first() {
+                        Some(g) if g.frame != r.frame => {
+                            *pending = Some(r);
+                            break;
+                        }
+                        _ => group.push(r),
+                    }
+                }
+                Ok(group.first().map(|g| g.frame).map(|f| (f, group)))
+            }
+        }
+    }
+}
+
+/// Where tracked shapes go: straight to the output file, frame by frame (online MOT/MOTS), or
+/// collected for formats written as a whole and for the offline pass.
+enum Sink {
+    Stream {
+        out: AtomicFile,
+        /// Shapes of frames not yet written (confirmation reports a few earlier frames late).
+        pending: BTreeMap<u32, Vec<TrackedShape>>,
+        mots: bool,
+    },
+    Collect(Vec<TrackedShape>),
+}
+
+/// Frames a streamed output holds back before writing them: a track confirmed late reports
+/// the frames it was tentative in, and a lost track re-identified at confirmation takes over
+/// those frames; both reach back at most a few times `min_hits` frames.
+const REORDER_FRAMES: u32 = 256;
+
+/// Counts of what was reported.
+#[derive(Default)]
+struct Tally {
+    shapes: usize,
+    interpolated: usize,
+    ids: std::collections::HashSet<u64>,
+}
+
+impl Tally {
+    fn add(&mut self, shapes: &[TrackedShape]) {
+        self.shapes += shapes.len();
+        self.interpolated += shapes.iter().filter(|s| s.interpolated).count();
+        self.ids.extend(shapes.iter().map(|s| s.id));
+    }
+}
+
+impl Sink {
+    fn push(&mut self, shapes: Vec<TrackedShape>, ctx: &OutCtx) -> Result<(), IoError> {
+        match self {
+            Sink::Collect(v) => v.extend(shapes),
+            Sink::Stream { pending, .. } => {
+                for s in shapes {
+                    pending.entry(s.frame).or_default().push(s);
+                }
+                self.flush_before(ctx.now.saturating_sub(REORDER_FRAMES), ctx)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the held frames before tracker frame `frame`.
+    fn flush_before(&mut self, frame: u32, ctx: &OutCtx) -> Result<(), IoError> {
+        use std::io::Write as _;
+        let Sink::Stream { out, pending, mots } = self else {
+            return Ok(());
+        };
+        while let Some(entry) = pending.first_entry() {
+            if *entry.key() >= frame {
+                break;
+            }
+            let mut shapes = entry.remove();
+            if *mots {
+                for s in &mut shapes {
+                    if s.mask.is_none() {
+                        s.mask = Some(Mask::from_bbox(&s.bbox));
+                    }
+                }
+            }
+            let records = to_records(&shapes, ctx.first_frame, ctx.image_size);
+            let text = if *mots {
+                write_mots(&records)
+            } else {
+                write_mot(&records)
+            };
+            out.write_all(text.as_bytes())
+                .map_err(|source| IoError::Io {
+                    file: ctx.out.display().to_string(),
+                    source,
+                })?;
+        }
+        Ok(())
+    }
+}
+
+/// What the sink needs to turn shapes into lines.
+struct OutCtx<'a> {
+    out: &'a Path,
+    first_frame: u32,
+    image_size: Option<(u32, u32)>,
+    /// The tracker's current frame.
+    now: u32,
+}
+
+/// Whether two paths name the same existing file.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// The tracker of the run: online alone, or inside the offline one.
+enum Runner {
+    Online(Box<Tracker>),
+    Offline(Box<OfflineTracker>),
+}
+
+impl Runner {
+    fn frame(&self) -> u32 {
+        match self {
+            Runner::Online(t) => t.frame(),
+            Runner::Offline(t) => t.frames(),
+        }
+    }
+
+    fn skip_idle(&mut self, n: u32) -> u32 {
+        match self {
+            Runner::Online(t) => t.skip_idle(n),
+            Runner::Offline(t) => t.skip_idle(n),
+        }
+    }
+
+    /// One frame; the online shapes it reported (the offline tracker keeps its own).
+    fn update(
+        &mut self,
+        frame: Option<&Frame<'_>>,
+        dets: &[shapetrack::frame::Detection],
+    ) -> Result<Vec<TrackedShape>, Box<dyn std::error::Error>> {
+        Ok(match self {
+            Runner::Online(t) => t.update(frame, dets)?,
+            Runner::Offline(t) => {
+                t.push_frame(frame, dets)?;
+                Vec::new()
+            }
+        })
+    }
+}
+
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
     let det_name = args.det.display().to_string();
-    let text = read_text(&args.det)?;
-    let scalabel_input = is_json(&text);
-    // Scalabel masks are tracked like MOTS masks.
-    let mots = if scalabel_input {
-        text.contains("\"rle\"") && text.contains("\"counts\"")
+    // Never write over an input: a typo in --out must not destroy the detections.
+    let inputs = [
+        Some(&args.det),
+        args.config.as_ref(),
+        args.offline_config.as_ref(),
+        args.seqinfo.as_ref(),
+    ];
+    for input in inputs.into_iter().flatten() {
+        for out in std::iter::once(&args.out).chain(args.joins.as_ref()) {
+            if same_file(out, input) {
+                return Err(format!(
+                    "{} is an input of this run: write the output somewhere else",
+                    out.display()
+                )
+                .into());
+            }
+        }
+    }
+    // Told apart by the first non-blank text; JSON is read whole, text files line by line.
+    let head = {
+        let mut lines = open_lines(&args.det)?;
+        let mut head = String::new();
+        while let Some(l) = line_of(lines.next(), &args.det)? {
+            if !l.trim().is_empty() {
+                head = l;
+                break;
+            }
+        }
+        head
+    };
+    let scalabel_input = is_json(&head);
+    let json_text = if scalabel_input {
+        Some(read_text(&args.det)?)
     } else {
-        is_mots(&text)
+        None
+    };
+    // Scalabel masks are tracked like MOTS masks.
+    let mots = match &json_text {
+        Some(text) => text.contains("\"rle\"") && text.contains("\"counts\""),
+        None => is_mots(&head),
     };
     // Masks get the mask preset (appearance, amodal completion, re-identification by colour
     // and SIFT when frames are given); a JSON config fills its missing fields from it too.
@@ -201,7 +568,7 @@ pub fn run(args: Args) -> crate::CliResult {
     if let Some(p) = &args.offline_config {
         let bad = |e: serde_json::Error| format!("{}: {e}", p.display());
         let value: serde_json::Value = serde_json::from_str(&read_text(p)?).map_err(bad)?;
-        let from_file: OfflineConfig = serde_json::from_value(value.clone()).map_err(bad)?;
+        let from_file = OfflineConfig::from_value(value.clone()).map_err(bad)?;
         // The file's `online` section, when present, merges over --config (or the preset);
         // without one, the online pass is the one --config (or the preset) describes.
         let online = match value.get("online") {
@@ -213,22 +580,62 @@ pub fn run(args: Args) -> crate::CliResult {
             ..from_file
         };
     }
-    let mut scalabel_video: Option<(String, Categories)> = None;
-    let records = if scalabel_input {
-        let (video, recs, cats) = scalabel_detections(&text, &det_name, args.video.as_deref())?;
-        scalabel_video = Some((video, cats));
-        recs
-    } else if mots {
-        parse_mots(&text, &det_name)?
-    } else {
-        parse_mot(&text, &det_name)?
-    };
 
     let seqinfo_path = args.seqinfo.clone().or_else(|| {
         let p = args.det.parent()?.parent()?.join("seqinfo.ini");
         p.is_file().then_some(p)
     });
     let seqinfo = seqinfo_path.as_deref().map(SeqInfo::read).transpose()?;
+    let seq_size = seqinfo
+        .as_ref()
+        .filter(|s| s.im_width > 0 && s.im_height > 0)
+        .map(|s| (s.im_width, s.im_height));
+
+    let mut scalabel_video: Option<(String, Categories)> = None;
+    let (mut groups, num_records, first_rec, last_rec, mask_size) = match &json_text {
+        Some(text) => {
+            let (video, recs, cats) = scalabel_detections(text, &det_name, args.video.as_deref())?;
+            scalabel_video = Some((video, cats));
+            for r in &recs {
+                check_mask_size(r, seq_size, &det_name, 0)?;
+            }
+            let first = recs.iter().map(|r| r.frame).min();
+            let last = recs.iter().map(|r| r.frame).max().unwrap_or(0);
+            let mask = recs
+                .iter()
+                .find_map(|r| r.mask.as_ref().map(|m| (m.width, m.height)));
+            let n = recs.len();
+            (Groups::loaded(recs), n, first, last, mask)
+        }
+        None => {
+            let sc = scan(&args.det, mots, seq_size)?;
+            let groups = if sc.sorted {
+                Groups::Stream {
+                    lines: open_lines(&args.det)?,
+                    path: args.det.clone(),
+                    mots,
+                    ln: 0,
+                    pending: None,
+                }
+            } else {
+                let text = read_text(&args.det)?;
+                let recs = if mots {
+                    parse_mots(&text, &det_name)?
+                } else {
+                    parse_mot(&text, &det_name)?
+                };
+                Groups::loaded(recs)
+            };
+            (
+                groups,
+                sc.records,
+                sc.first_frame,
+                sc.last_frame,
+                sc.mask_size,
+            )
+        }
+    };
+
     let fps = args
         .fps
         .or(seqinfo.as_ref().map(|s| s.frame_rate))
@@ -248,48 +655,73 @@ pub fn run(args: Args) -> crate::CliResult {
     }
 
     // MOTS files may number frames from 0 (KITTI-MOTS); the tracker counts from 1.
-    let first_frame = records.iter().map(|r| r.frame).min().unwrap_or(1).min(1);
-    let last_frame = records.iter().map(|r| r.frame).max().unwrap_or(0);
+    let first_frame = first_rec.unwrap_or(1).min(1);
     let num_frames = match &seqinfo {
-        Some(s) => s.seq_length.max(last_frame + 1 - first_frame),
-        None => last_frame + 1 - first_frame,
+        Some(s) => s.seq_length.max(last_rec + 1 - first_frame),
+        None => last_rec + 1 - first_frame,
     };
-    let per_frame = detections_by_frame(&records, first_frame, num_frames);
-
-    let image_size = seqinfo
-        .as_ref()
-        .map(|s| (s.im_width, s.im_height))
-        .or_else(|| {
-            records
-                .iter()
-                .find_map(|r| r.mask.as_ref().map(|m| (m.width, m.height)))
-        });
+    let image_size = seq_size.or(mask_size);
     let images = args.frames.as_deref().map(list_images).transpose()?;
+    if let (Some(imgs), Some(dir)) = (&images, &args.frames) {
+        if (imgs.len() as u64) < num_frames as u64 {
+            return Err(format!(
+                "{} holds {} images (.jpg/.png) but the sequence has {num_frames} frames: \
+                 appearance needs one image per frame",
+                dir.display(),
+                imgs.len()
+            )
+            .into());
+        }
+    }
 
     // Online: the tracker alone. Offline: the same tracker inside the offline one, which keeps
     // appearance snapshots while frames stream through and runs the re-linker at the end.
-    let mut online = if args.offline {
-        None
+    let mut runner = if args.offline {
+        let t = OfflineTracker::new(offline_config, fps)?;
+        Runner::Offline(Box::new(match image_size {
+            Some((w, h)) => t.with_image_size(w, h),
+            None => t,
+        }))
     } else {
         let t = Tracker::new(online_config)?;
-        Some(match image_size {
+        Runner::Online(Box::new(match image_size {
             Some((w, h)) => t.with_image_size(w, h),
             None => t,
-        })
+        }))
     };
-    let mut offline = if args.offline {
-        let t = OfflineTracker::new(offline_config, fps)?;
-        Some(match image_size {
-            Some((w, h)) => t.with_image_size(w, h),
-            None => t,
-        })
-    } else {
-        None
+
+    let format =
+        args.format
+            .unwrap_or_else(|| match args.out.extension().and_then(|e| e.to_str()) {
+                Some("json") => Format::Coco,
+                Some("xml") => Format::Cvat,
+                _ => Format::Mot,
+            });
+    if format == Format::Mots && image_size.is_none() {
+        return Err("MOTS output needs the image size: give --seqinfo or mask input".into());
+    }
+    // Online MOT/MOTS output is written while tracking, so memory stays flat over any length.
+    let mut sink = match (args.offline, format) {
+        (false, Format::Mot | Format::Mots) => Sink::Stream {
+            out: AtomicFile::create(&args.out)?,
+            pending: BTreeMap::new(),
+            mots: format == Format::Mots,
+        },
+        _ => Sink::Collect(Vec::new()),
     };
-    let mut shapes: Vec<TrackedShape> = Vec::new();
+    let mut tally = Tally::default();
     let mut core = Duration::ZERO;
-    for (k, dets) in per_frame.iter().enumerate() {
-        let img = match images.as_ref().and_then(|v| v.get(k)) {
+    // Runs the tracker over frames (file numbering) from the runner's next frame up to
+    // `frame` (exclusive) that have no detections; with no live track they are skipped.
+    let end = first_frame as u64 + num_frames as u64;
+    let step = |runner: &mut Runner,
+                sink: &mut Sink,
+                tally: &mut Tally,
+                core: &mut Duration,
+                k: u32,
+                dets: &[shapetrack::frame::Detection]|
+     -> crate::CliResult {
+        let img = match images.as_ref().and_then(|v| v.get(k as usize)) {
             Some(p) => Some(load_rgb(p)?),
             None => None,
         };
@@ -298,15 +730,65 @@ pub fn run(args: Args) -> crate::CliResult {
             .map(|i| Frame::rgb(i.as_raw(), i.width(), i.height()))
             .transpose()?;
         let t0 = Instant::now();
-        if let Some(t) = online.as_mut() {
-            shapes.extend(t.update(frame.as_ref(), dets)?);
-        } else if let Some(t) = offline.as_mut() {
-            t.push_frame(frame.as_ref(), dets)?;
+        let shapes = runner.update(frame.as_ref(), dets)?;
+        *core += t0.elapsed();
+        tally.add(&shapes);
+        let ctx = OutCtx {
+            out: &args.out,
+            first_frame,
+            image_size,
+            now: runner.frame(),
+        };
+        sink.push(shapes, &ctx)?;
+        Ok(())
+    };
+    let empty_until = |runner: &mut Runner,
+                       sink: &mut Sink,
+                       tally: &mut Tally,
+                       core: &mut Duration,
+                       stop: u64|
+     -> crate::CliResult {
+        loop {
+            // Index (0-based) of the next frame the runner will see.
+            let k = runner.frame() as u64;
+            let left = stop.saturating_sub(first_frame as u64 + k);
+            if left == 0 {
+                return Ok(());
+            }
+            if runner.skip_idle(left.min(u32::MAX as u64) as u32) == 0 {
+                step(runner, sink, tally, core, k as u32, &[])?;
+            }
         }
-        core += t0.elapsed();
+    };
+    while let Some((fr, recs)) = groups.next_group()? {
+        if (fr as u64) < first_frame as u64 + runner.frame() as u64 {
+            continue; // cannot happen: groups come in frame order from first_frame
+        }
+        empty_until(&mut runner, &mut sink, &mut tally, &mut core, fr as u64)?;
+        let dets = detections_by_frame(&recs, fr, 1).pop().unwrap_or_default();
+        let k = fr - first_frame;
+        step(&mut runner, &mut sink, &mut tally, &mut core, k, &dets)?;
     }
+    empty_until(&mut runner, &mut sink, &mut tally, &mut core, end)?;
+
     let mut summary = String::new();
-    if let Some(t) = offline {
+    let mut shapes = match sink {
+        Sink::Stream { .. } => {
+            let ctx = OutCtx {
+                out: &args.out,
+                first_frame,
+                image_size,
+                now: runner.frame(),
+            };
+            sink.flush_before(u32::MAX, &ctx)?;
+            if let Sink::Stream { out, .. } = sink {
+                out.commit()?;
+            }
+            None
+        }
+        Sink::Collect(v) => Some(v),
+    };
+    if let Runner::Offline(t) = runner {
         let t0 = Instant::now();
         let mut last_phase = None;
         let res = t.finish(|p| {
@@ -321,65 +803,56 @@ pub fn run(args: Args) -> crate::CliResult {
         if let Some(p) = &args.joins {
             write_text(p, &serde_json::to_string_pretty(&res.joins)?)?;
         }
-        shapes = res.shapes;
+        tally = Tally::default();
+        tally.add(&res.shapes);
+        shapes = Some(res.shapes);
     }
     // Shapes not taken from a detection: coasted online over a missed detection, or filled
     // offline. MOT text cannot mark them; the count says how many there are.
-    let interpolated = shapes.iter().filter(|s| s.interpolated).count();
-    summary.push_str(&format!(" interpolated={interpolated}"));
+    summary.push_str(&format!(" interpolated={}", tally.interpolated));
 
-    let format =
-        args.format
-            .unwrap_or_else(|| match args.out.extension().and_then(|e| e.to_str()) {
-                Some("json") => Format::Coco,
-                Some("xml") => Format::Cvat,
-                _ => Format::Mot,
-            });
-    if format == Format::Mots {
-        for s in &mut shapes {
-            if s.mask.is_none() {
-                // Boxes are the degenerate case of masks: write the box as a filled mask.
-                s.mask = Some(Mask::from_bbox(&s.bbox));
+    if let Some(mut shapes) = shapes {
+        if format == Format::Mots {
+            for s in &mut shapes {
+                if s.mask.is_none() {
+                    // Boxes are the degenerate case of masks: write the box as a filled mask.
+                    s.mask = Some(Mask::from_bbox(&s.bbox));
+                }
             }
         }
+        let out_records = to_records(&shapes, first_frame, image_size);
+        let body = match format {
+            Format::Mot => write_mot(&out_records),
+            Format::Mots => write_mots(&out_records),
+            Format::Coco => coco(&out_records, num_frames, image_size)?,
+            Format::Cvat => cvat(&out_records, num_frames, image_size, &args.det)?,
+            Format::Scalabel => {
+                let (video, cats) = scalabel_video
+                    .clone()
+                    .unwrap_or_else(|| (task_name(&args.det), Categories::default()));
+                write_scalabel(&scalabel::from_records(
+                    &out_records,
+                    &video,
+                    num_frames,
+                    None,
+                    &cats,
+                ))?
+            }
+        };
+        write_text(&args.out, &body)?;
     }
-    let out_records = to_records(&shapes, first_frame, image_size);
-    let body = match format {
-        Format::Mot => write_mot(&out_records),
-        Format::Mots => {
-            if image_size.is_none() {
-                return Err(
-                    "MOTS output needs the image size: give --seqinfo or mask input".into(),
-                );
-            }
-            write_mots(&out_records)
-        }
-        Format::Coco => coco(&out_records, num_frames, image_size)?,
-        Format::Cvat => cvat(&out_records, num_frames, image_size, &args.det)?,
-        Format::Scalabel => {
-            let (video, cats) = scalabel_video
-                .clone()
-                .unwrap_or_else(|| (task_name(&args.det), Categories::default()));
-            write_scalabel(&scalabel::from_records(
-                &out_records,
-                &video,
-                num_frames,
-                None,
-                &cats,
-            ))?
-        }
-    };
-    write_text(&args.out, &body)?;
 
-    let ids: std::collections::HashSet<u64> = shapes.iter().map(|s| s.id).collect();
+    if let Some(kb) = peak_memory_kb() {
+        summary.push_str(&format!(" peak_mem_kb={kb}"));
+    }
     let secs = core.as_secs_f64();
     println!(
         "{}: frames={} detections={} tracks={} shapes={}{} core_fps={:.0} ({} mode, {}, fps {})",
         args.det.display(),
         num_frames,
-        records.len(),
-        ids.len(),
-        shapes.len(),
+        num_records,
+        tally.ids.len(),
+        tally.shapes,
         summary,
         if secs > 0.0 {
             num_frames as f64 / secs
@@ -391,6 +864,14 @@ pub fn run(args: Args) -> crate::CliResult {
         fps
     );
     Ok(())
+}
+
+/// The process's peak resident memory (Linux `VmHWM`), for the summary line: a long video
+/// must not make it grow (online MOT/MOTS output streams).
+fn peak_memory_kb() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 /// A label name per class present (`object` for the unknown class -1).
@@ -458,6 +939,33 @@ fn cvat(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frame_files_sort_as_people_number_them() {
+        let mut names = vec![
+            "12.png",
+            "2.png",
+            "10.png",
+            "1.png",
+            "frame_002.jpg",
+            "frame_10.jpg",
+        ];
+        names.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            names,
+            [
+                "1.png",
+                "2.png",
+                "10.png",
+                "12.png",
+                "frame_002.jpg",
+                "frame_10.jpg"
+            ]
+        );
+        let mut padded = vec!["000010.jpg", "000002.jpg", "000001.jpg"];
+        padded.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(padded, ["000001.jpg", "000002.jpg", "000010.jpg"]);
+    }
 
     #[test]
     fn json_config_overrides_only_its_fields() {

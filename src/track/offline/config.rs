@@ -267,7 +267,15 @@ impl OfflineConfig {
 
     /// Reads a config from JSON; missing fields take their defaults, unknown fields are errors.
     pub fn from_json(text: &str) -> Result<OfflineConfig, serde_json::Error> {
-        serde_json::from_str(text)
+        Self::from_value(serde_json::from_str(text)?)
+    }
+
+    /// [`OfflineConfig::from_json`] from a parsed value; arrays where sections belong are
+    /// errors (see [`crate::track::config::check_shape`]).
+    pub fn from_value(v: serde_json::Value) -> Result<OfflineConfig, serde_json::Error> {
+        let template = serde_json::to_value(OfflineConfig::default())?;
+        crate::track::config::check_shape(&v, &template, "config")?;
+        serde_json::from_value(v)
     }
 }
 

@@ -403,6 +403,12 @@ impl OfflineTracker {
         Ok(&self.shapes[start..])
     }
 
+    /// Skips `n` frames without detections while no track is live (see
+    /// [`Tracker::skip_idle`]); returns how many were skipped (`n` or 0).
+    pub fn skip_idle(&mut self, n: u32) -> u32 {
+        self.tracker.skip_idle(n)
+    }
+
     /// Frames pushed so far.
     pub fn frames(&self) -> u32 {
         self.tracker.frame()

@@ -1,0 +1,37 @@
+//! Documented caps on what an annotation or detection file may describe, checked before
+//! anything is allocated from it.
+//!
+//! A few bytes of text can declare a 65536 × 65536 mask, frame 4,294,967,295 or an
+//! interpolation span of a million frames; read naively, each becomes gigabytes of memory or
+//! hours of work (in wasm, a trap that kills the page's tracker). Every reader checks sizes,
+//! counts and frame numbers against these caps (and against what the file itself says, e.g.
+//! a mask must fit its frame) and answers with a typed error naming the file, line and cap.
+//! The caps are far above any real video: 2²⁰ frames is 9.7 hours at 30 fps; 2²⁶ pixels is
+//! 8192 × 8192 (8K UHD is 7680 × 4320).
+
+/// Highest frame number a file may use (frames are counted from 0 or 1).
+pub const MAX_FRAME: u32 = 1 << 20;
+
+/// Longest side of an image or mask, in pixels.
+pub const MAX_SIDE: u32 = 1 << 16;
+
+/// Most pixels of one image or decoded mask (8192 × 8192).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Most mask pixels one file may decode into bitmaps in total (256 MB of bitmaps).
+pub const MAX_TOTAL_PIXELS: u64 = 1 << 28;
+
+/// Most records (shapes) one file may expand into by interpolating between keyframes (a
+/// hundred tracks over 5,000 frames; a record costs ~100 bytes natively, ~500 in the app).
+pub const MAX_RECORDS: u64 = 1 << 19;
+
+/// Most RLE run lengths the records read from one file may hold in total (128 MB).
+pub const MAX_TOTAL_RUNS: u64 = 1 << 25;
+
+/// Whether `width × height` is an image size the readers accept (both sides ≥ 1, within
+/// [`MAX_SIDE`] and [`MAX_PIXELS`]).
+pub fn image_size_ok(width: u64, height: u64) -> bool {
+    (1..=MAX_SIDE as u64).contains(&width)
+        && (1..=MAX_SIDE as u64).contains(&height)
+        && width * height <= MAX_PIXELS
+}
