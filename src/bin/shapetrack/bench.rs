@@ -97,9 +97,6 @@ fn measure(frames: &[SynthFrame], mode: Mode) -> Result<PhaseTimes, Box<dyn std:
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
-    // Single-threaded: linfa's k-means would otherwise spread over a rayon pool, which the
-    // browser (wasm32) does not have. The pool reads this when it first starts, below.
-    std::env::set_var("RAYON_NUM_THREADS", "1");
     if args.frames == 0 {
         return Err("--frames must be at least 1".into());
     }

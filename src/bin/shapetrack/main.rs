@@ -44,6 +44,22 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    // One thread, as in the browser (ARCHITECTURE.md: single-threaded per worker), and the
+    // command runs *on* that pool's thread: linfa's k-means calls rayon for every small
+    // per-pair clustering, and from outside the pool each call is a hand-off to a worker and
+    // back (profiled on 50 masks a frame: ~12 % of the time in futex waits and context
+    // switches). Run inside the pool, rayon executes those calls inline. Same output.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .stack_size(8 << 20)
+        .build();
+    match pool {
+        Ok(p) => p.install(run),
+        Err(_) => run(),
+    }
+}
+
+fn run() -> ExitCode {
     let cli = Cli::parse();
     let res = match cli.cmd {
         Cmd::Track(a) => track::run(a),
