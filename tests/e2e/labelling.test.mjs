@@ -196,11 +196,19 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
   await page.keyboard.press('Control+z');
   st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   assert.deepEqual(st.ids, st0.ids);
-  // ? opens the shortcut list.
+  // ? opens the shortcut list; keys do not reach the player behind it; Esc closes it.
   await page.keyboard.press('?');
   assert.ok(await page.locator('#help-dialog').isVisible());
   assert.ok((await page.locator('#help-table tr').count()) >= 20);
+  const under = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  await page.keyboard.press('ArrowRight');
+  await page.keyboard.press('End');
+  await page.keyboard.press('Control+z');
+  const still = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(still.frame, under.frame, 'no seek behind the dialog');
+  assert.deepEqual(still.ids, under.ids, 'no undo behind the dialog');
   await page.keyboard.press('Escape');
+  await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
   assert.deepEqual(errors, []);
   await page.close();
 });

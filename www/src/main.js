@@ -36,6 +36,9 @@ async function main() {
   }
 
   document.addEventListener('keydown', (e) => {
+    // An open dialog owns the keyboard: its own Esc closes it (so no preventDefault here), and
+    // no shortcut reaches the player behind it.
+    if (document.querySelector('dialog[open]')) return;
     if (typing(e) && e.key !== 'Escape') return;
     const a = actionFor(e);
     if (!a) return;
