@@ -65,6 +65,8 @@ test('an image sequence is tracked, stepped and exported in every format', async
   for (const format of ['mot', 'mots', 'coco-video', 'cvat']) {
     await page.selectOption('#export-format', format);
     const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+    // Named after the sequence, not its first file (`00000001.mot.txt` before).
+    assert.match(download.suggestedFilename(), /^images\./, format);
     const text = readFileSync(await download.path(), 'utf8');
     const back = await page.evaluate(
       ([f, t]) => {

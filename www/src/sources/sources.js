@@ -118,6 +118,30 @@ export async function videoSource(video, file) {
   };
 }
 
+/**
+ * A name for an image sequence, used for exports: its folder when the browser says (a folder
+ * pick), else what its file names share before the frame number (`frame_0001.png` …
+ * `frame_0100.png` → `frame`), else `images` — never the first file's name, which would call
+ * the exports `00000.mot.txt`.
+ * @param {string[]} names file names, in order
+ * @param {string} [dir] the folder, when known
+ * @returns {string}
+ */
+export function sequenceName(names, dir) {
+  if (dir) return dir;
+  const stems = names.map((n) => n.replace(/\.[^.]*$/, ''));
+  let prefix = stems[0] ?? '';
+  for (const s of stems) {
+    let k = 0;
+    while (k < prefix.length && k < s.length && prefix[k] === s[k]) k++;
+    prefix = prefix.slice(0, k);
+  }
+  // The shared part may end inside the frame number (`frame_00` of `frame_0001`): cut back to
+  // before it, and drop the separators.
+  const name = prefix.replace(/\d+$/, '').replace(/[\s._-]+$/, '');
+  return name || 'images';
+}
+
 /** Natural order: frame2.jpg before frame10.jpg. */
 const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
 
@@ -136,7 +160,10 @@ export async function imageSource(files, fps = 25) {
   const dir = list[0].webkitRelativePath?.split('/')[0];
   return {
     kind: 'images',
-    name: dir || list[0].name,
+    name: sequenceName(
+      list.map((f) => f.name),
+      dir,
+    ),
     width,
     height,
     frames: list.length,
