@@ -1940,7 +1940,7 @@ impl Tracker {
         };
         let seq = SequenceInfo {
             fps: off.fps,
-            image_size: self.size.or(off.size),
+            image_size: self.image_size(),
         };
         let snapshots = (!off.snapshots.is_empty()).then_some(&off.snapshots);
         let result = offline::relink(
@@ -1971,7 +1971,6 @@ impl Tracker {
             .iter()
             .map(|k| (k.shape.id, k.shape.frame))
             .collect();
-        let mut filled = 0u32;
         let mut added = Vec::new();
         for mut s in result
             .shapes
@@ -1982,7 +1981,6 @@ impl Tracker {
             let kept = Kept { shape: s, rle };
             added.push(kept.record());
             self.history.push(kept);
-            filled += 1;
         }
         self.history.sort_by_key(|k| (k.shape.frame, k.shape.id));
         self.finished = true;
@@ -1994,7 +1992,7 @@ impl Tracker {
         ts(&OfflineOutput {
             records: from_core_records(&records),
             joins: result.joins.iter().map(JoinJs::from).collect(),
-            filled,
+            filled: added.len() as u32,
             added: from_core_records(&added),
         })
     }

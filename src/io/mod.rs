@@ -148,6 +148,63 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     (line, before[line_start..].chars().count() + 1)
 }
 
+/// The image files (`.jpg`, `.jpeg`, `.png`) of a frame folder in natural order (`2.png`
+/// before `10.png`; zero-padded names such as MOTChallenge's sort the same either way).
+pub fn image_files(dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, IoError> {
+    let rd = std::fs::read_dir(dir).map_err(|source| IoError::Io {
+        file: dir.display().to_string(),
+        source,
+    })?;
+    let mut files: Vec<std::path::PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "jpg" | "jpeg" | "png"))
+        })
+        .collect();
+    files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+    Ok(files)
+}
+
+/// Compares names as people number files: runs of digits by value, the rest by character.
+pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    fn chunks(s: &str) -> Vec<(bool, &str)> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        let mut digit = None;
+        for (i, c) in s.char_indices() {
+            let d = c.is_ascii_digit();
+            if digit.is_some_and(|p| p != d) {
+                out.push((digit.unwrap_or(false), &s[start..i]));
+                start = i;
+            }
+            digit = Some(d);
+        }
+        if start < s.len() {
+            out.push((digit.unwrap_or(false), &s[start..]));
+        }
+        out
+    }
+    let (ca, cb) = (chunks(a), chunks(b));
+    for ((da, x), (db, y)) in ca.iter().zip(cb.iter()) {
+        let o = if *da && *db {
+            let (tx, ty) = (x.trim_start_matches('0'), y.trim_start_matches('0'));
+            tx.len()
+                .cmp(&ty.len())
+                .then_with(|| tx.cmp(ty))
+                .then_with(|| x.len().cmp(&y.len()))
+        } else {
+            x.cmp(y)
+        };
+        if o != Ordering::Equal {
+            return o;
+        }
+    }
+    ca.len().cmp(&cb.len())
+}
+
 /// Writes a whole text file, naming the file in the error.
 ///
 /// The text goes to a temporary file beside `path` that is renamed over it once complete, so
@@ -328,4 +385,36 @@ pub fn by_frame(records: &[Record], num_frames: u32) -> Vec<Vec<&Record>> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_files_sort_as_people_number_them() {
+        let mut names = vec![
+            "12.png",
+            "2.png",
+            "10.png",
+            "1.png",
+            "frame_002.jpg",
+            "frame_10.jpg",
+        ];
+        names.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            names,
+            [
+                "1.png",
+                "2.png",
+                "10.png",
+                "12.png",
+                "frame_002.jpg",
+                "frame_10.jpg"
+            ]
+        );
+        let mut padded = vec!["000010.jpg", "000002.jpg", "000001.jpg"];
+        padded.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(padded, ["000001.jpg", "000002.jpg", "000010.jpg"]);
+    }
 }

@@ -96,66 +96,64 @@ pub fn parse_mot_line(
     ln: usize,
     opts: MotReadOptions,
 ) -> Result<Option<Record>, IoError> {
-    {
-        let line = raw.trim_end_matches('\r').trim();
-        if line.is_empty() {
-            return Ok(None);
-        }
-        let f = fields(line);
-        if f.len() < 6 {
-            return Err(IoError::parse(
-                file,
-                ln,
-                f.len() + 1,
-                "at least 6 fields: frame,id,x,y,w,h[,conf,...]",
-                line,
-            ));
-        }
-        let frame = int(file, ln, 1, f[0], "frame number")?;
-        let first = if opts.allow_frame_zero { 0 } else { 1 };
-        if frame < first || frame > MAX_FRAME as i64 {
-            return Err(IoError::parse(
-                file,
-                ln,
-                1,
-                format!("frame number in {first}..={MAX_FRAME} (the readers' cap)"),
-                f[0],
-            ));
-        }
-        let id = int(file, ln, 2, f[1], "track id")?;
-        let x = num(file, ln, 3, f[2], "box left")?;
-        let y = num(file, ln, 4, f[3], "box top")?;
-        let w = num(file, ln, 5, f[4], "box width")?;
-        let h = num(file, ln, 6, f[5], "box height")?;
-        if w < 0.0 && !opts.allow_negative_size {
-            return Err(IoError::parse(file, ln, 5, "box width ≥ 0", f[4]));
-        }
-        if h < 0.0 && !opts.allow_negative_size {
-            return Err(IoError::parse(file, ln, 6, "box height ≥ 0", f[5]));
-        }
-        let score = match f.get(6) {
-            Some(s) => num(file, ln, 7, s, "confidence")?,
-            None => 1.0,
-        };
-        let class = match f.get(7) {
-            Some(s) => num(file, ln, 8, s, "class")? as i32,
-            None => -1,
-        };
-        let visibility = match f.get(8) {
-            Some(s) => num(file, ln, 9, s, "visibility")?,
-            None => -1.0,
-        };
-        Ok(Some(Record {
-            frame: frame as u32,
-            id,
-            bbox: BBox::new(x, y, w, h),
-            score,
-            class,
-            visibility,
-            mask: None,
-            flags: RecordFlags::default(),
-        }))
+    let line = raw.trim_end_matches('\r').trim();
+    if line.is_empty() {
+        return Ok(None);
     }
+    let f = fields(line);
+    if f.len() < 6 {
+        return Err(IoError::parse(
+            file,
+            ln,
+            f.len() + 1,
+            "at least 6 fields: frame,id,x,y,w,h[,conf,...]",
+            line,
+        ));
+    }
+    let frame = int(file, ln, 1, f[0], "frame number")?;
+    let first = if opts.allow_frame_zero { 0 } else { 1 };
+    if frame < first || frame > MAX_FRAME as i64 {
+        return Err(IoError::parse(
+            file,
+            ln,
+            1,
+            format!("frame number in {first}..={MAX_FRAME} (the readers' cap)"),
+            f[0],
+        ));
+    }
+    let id = int(file, ln, 2, f[1], "track id")?;
+    let x = num(file, ln, 3, f[2], "box left")?;
+    let y = num(file, ln, 4, f[3], "box top")?;
+    let w = num(file, ln, 5, f[4], "box width")?;
+    let h = num(file, ln, 6, f[5], "box height")?;
+    if w < 0.0 && !opts.allow_negative_size {
+        return Err(IoError::parse(file, ln, 5, "box width ≥ 0", f[4]));
+    }
+    if h < 0.0 && !opts.allow_negative_size {
+        return Err(IoError::parse(file, ln, 6, "box height ≥ 0", f[5]));
+    }
+    let score = match f.get(6) {
+        Some(s) => num(file, ln, 7, s, "confidence")?,
+        None => 1.0,
+    };
+    let class = match f.get(7) {
+        Some(s) => num(file, ln, 8, s, "class")? as i32,
+        None => -1,
+    };
+    let visibility = match f.get(8) {
+        Some(s) => num(file, ln, 9, s, "visibility")?,
+        None => -1.0,
+    };
+    Ok(Some(Record {
+        frame: frame as u32,
+        id,
+        bbox: BBox::new(x, y, w, h),
+        score,
+        class,
+        visibility,
+        mask: None,
+        flags: RecordFlags::default(),
+    }))
 }
 
 /// Writes records as MOTChallenge txt, `frame,id,x,y,w,h,conf,-1,-1,-1` per line, sorted by
@@ -200,82 +198,79 @@ pub fn parse_mots(text: &str, file: &str) -> Result<Vec<Record>, IoError> {
 /// One line of a MOTS txt file (`ln` is its 1-based number, for errors): `None` for a blank
 /// line. What [`parse_mots`] does per line, for readers that stream.
 pub fn parse_mots_line(raw: &str, file: &str, ln: usize) -> Result<Option<Record>, IoError> {
-    {
-        let line = raw.trim_end_matches('\r').trim();
-        if line.is_empty() {
-            return Ok(None);
-        }
-        let f: Vec<&str> = line.split_whitespace().collect();
-        if f.len() < 6 {
-            return Err(IoError::parse(
-                file,
-                ln,
-                f.len() + 1,
-                "6 fields: frame id class height width rle",
-                line,
-            ));
-        }
-        let frame = int(file, ln, 1, f[0], "frame number")?;
-        if !(0..=MAX_FRAME as i64).contains(&frame) {
-            return Err(IoError::parse(
-                file,
-                ln,
-                1,
-                format!("frame number in 0..={MAX_FRAME} (the readers' cap)"),
-                f[0],
-            ));
-        }
-        let id = int(file, ln, 2, f[1], "object id")?;
-        let class = int(file, ln, 3, f[2], "class id")? as i32;
-        let h = int(file, ln, 4, f[3], "image height")?;
-        let w = int(file, ln, 5, f[4], "image width")?;
-        if !(1..=1 << 16).contains(&h) {
-            return Err(IoError::parse(
-                file,
-                ln,
-                4,
-                "image height in 1..=65536",
-                f[3],
-            ));
-        }
-        if !(1..=1 << 16).contains(&w) {
-            return Err(IoError::parse(
-                file,
-                ln,
-                5,
-                "image width in 1..=65536",
-                f[4],
-            ));
-        }
-        if !image_size_ok(w as u64, h as u64) {
-            return Err(IoError::parse(
-                file,
-                ln,
-                4,
-                format!("image of at most {MAX_PIXELS} pixels (the readers' cap)"),
-                &format!("{h} {w}"),
-            ));
-        }
-        let rle =
-            Rle::from_compressed(f[5], h as u32, w as u32).map_err(|source| IoError::Rle {
-                file: file.to_string(),
-                line: ln,
-                source,
-            })?;
-        let bbox = rle.bbox();
-        // MOTS frames are 0-based in KITTI-MOTS but 1-based in MOTS20; keep what the file says
-        // (frame 0 is stored as 0 and callers that need 1-based frames shift it).
-        Ok(Some(Record {
-            frame: frame as u32,
-            id,
-            bbox,
-            score: 1.0,
-            class,
-            visibility: -1.0,
-            mask: Some(rle),
-            flags: RecordFlags::default(),
-        }))
+    let line = raw.trim_end_matches('\r').trim();
+    if line.is_empty() {
+        return Ok(None);
     }
+    let f: Vec<&str> = line.split_whitespace().collect();
+    if f.len() < 6 {
+        return Err(IoError::parse(
+            file,
+            ln,
+            f.len() + 1,
+            "6 fields: frame id class height width rle",
+            line,
+        ));
+    }
+    let frame = int(file, ln, 1, f[0], "frame number")?;
+    if !(0..=MAX_FRAME as i64).contains(&frame) {
+        return Err(IoError::parse(
+            file,
+            ln,
+            1,
+            format!("frame number in 0..={MAX_FRAME} (the readers' cap)"),
+            f[0],
+        ));
+    }
+    let id = int(file, ln, 2, f[1], "object id")?;
+    let class = int(file, ln, 3, f[2], "class id")? as i32;
+    let h = int(file, ln, 4, f[3], "image height")?;
+    let w = int(file, ln, 5, f[4], "image width")?;
+    if !(1..=1 << 16).contains(&h) {
+        return Err(IoError::parse(
+            file,
+            ln,
+            4,
+            "image height in 1..=65536",
+            f[3],
+        ));
+    }
+    if !(1..=1 << 16).contains(&w) {
+        return Err(IoError::parse(
+            file,
+            ln,
+            5,
+            "image width in 1..=65536",
+            f[4],
+        ));
+    }
+    if !image_size_ok(w as u64, h as u64) {
+        return Err(IoError::parse(
+            file,
+            ln,
+            4,
+            format!("image of at most {MAX_PIXELS} pixels (the readers' cap)"),
+            &format!("{h} {w}"),
+        ));
+    }
+    let rle = Rle::from_compressed(f[5], h as u32, w as u32).map_err(|source| IoError::Rle {
+        file: file.to_string(),
+        line: ln,
+        source,
+    })?;
+    let bbox = rle.bbox();
+    // MOTS frames are 0-based in KITTI-MOTS but 1-based in MOTS20; keep what the file says
+    // (frame 0 is stored as 0 and callers that need 1-based frames shift it).
+    Ok(Some(Record {
+        frame: frame as u32,
+        id,
+        bbox,
+        score: 1.0,
+        class,
+        visibility: -1.0,
+        mask: Some(rle),
+        flags: RecordFlags::default(),
+    }))
 }
 
 /// Writes records that carry masks as MOTS txt, sorted by frame then id. Records without a

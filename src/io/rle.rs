@@ -56,6 +56,42 @@ pub struct Rle {
     pub counts: Vec<u32>,
 }
 
+/// Where the foreground of a bitmap stored as run lengths lies: runs alternate background /
+/// foreground (background first) along lines of `line` pixels, `total` pixels in all (runs
+/// past it are cut). Returns `(first line, first position in a line, last line, last
+/// position)`, inclusive, or `None` when nothing is foreground. O(runs), no bitmap: COCO RLE
+/// (lines are columns) and VOT masks (lines are rows) both find their crop with it.
+pub(crate) fn runs_extent(
+    runs: impl IntoIterator<Item = u64>,
+    line: u64,
+    total: u64,
+) -> Option<(u64, u64, u64, u64)> {
+    if line == 0 || total == 0 {
+        return None;
+    }
+    let (mut l0, mut p0, mut l1, mut p1) = (u64::MAX, u64::MAX, 0u64, 0u64);
+    let mut pos = 0u64;
+    for (i, c) in runs.into_iter().enumerate() {
+        let end = pos.saturating_add(c).min(total);
+        if i % 2 == 1 && end > pos {
+            let (la, lb) = (pos / line, (end - 1) / line);
+            l0 = l0.min(la);
+            l1 = l1.max(lb);
+            // A run spanning several lines covers the end of the first, the start of the
+            // last, and every position of those in between.
+            if lb > la {
+                p0 = 0;
+                p1 = line - 1;
+            } else {
+                p0 = p0.min(pos % line);
+                p1 = p1.max((end - 1) % line);
+            }
+        }
+        pos = end;
+    }
+    (l0 != u64::MAX).then_some((l0, p0, l1, p1))
+}
+
 impl Rle {
     /// Encodes a row-major full-image bitmap (`width·height` bytes, non-zero = foreground).
     pub fn encode(width: u32, height: u32, bitmap: &[u8]) -> Result<Rle, FrameError> {
@@ -162,32 +198,9 @@ impl Rle {
     /// The foreground's bounding rectangle `(x0, y0, x1, y1)` (inclusive pixel indices), from
     /// the runs alone; `None` when the mask is empty. O(runs), no bitmap.
     fn fg_rect(&self) -> Option<(u64, u64, u64, u64)> {
-        let h = self.height as u64;
-        if h == 0 || self.width == 0 {
-            return None;
-        }
-        let total = h * self.width as u64;
-        let (mut x0, mut y0, mut x1, mut y1) = (u64::MAX, u64::MAX, 0u64, 0u64);
-        let mut pos = 0u64;
-        for (i, &c) in self.counts.iter().enumerate() {
-            let end = (pos + c as u64).min(total);
-            if i % 2 == 1 && end > pos {
-                let (xa, xb) = (pos / h, (end - 1) / h);
-                x0 = x0.min(xa);
-                x1 = x1.max(xb);
-                // A run spanning several columns covers the bottom of the first, the top of the
-                // last, and every row of those in between.
-                if xb > xa {
-                    y0 = 0;
-                    y1 = h - 1;
-                } else {
-                    y0 = y0.min(pos % h);
-                    y1 = y1.max((end - 1) % h);
-                }
-            }
-            pos = end;
-        }
-        (x0 != u64::MAX).then_some((x0, y0, x1, y1))
+        // Column-major: a "line" is a column of `height` pixels.
+        let (h, w) = (self.height as u64, self.width as u64);
+        runs_extent(self.counts.iter().map(|&c| c as u64), h, h * w)
     }
 
     /// The foreground's tight box (empty box for an empty mask), like `to_mask().bbox()`

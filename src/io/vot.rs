@@ -15,6 +15,7 @@
 //! by [`parse_anchor_values`].
 
 use super::limits::MAX_TOTAL_PIXELS;
+use super::rle::runs_extent;
 use super::{IoError, Rle};
 use crate::frame::{BBox, Mask, Point};
 use std::fmt::Write as _;
@@ -158,9 +159,8 @@ fn parse_region_counted(
             ));
         }
         let total = w * h;
-        // Pass 1: check the runs and find the foreground's rows and columns (row-major), so
-        // only the foreground's box is allocated: `m0,0,8192,8192,0,1` is one pixel, not 64 MB.
-        let (mut c0, mut r0, mut c1, mut r1) = (i64::MAX, i64::MAX, -1i64, -1i64);
+        // Check the runs, then find the foreground's rows and columns (row-major), so only
+        // the foreground's box is allocated: `m0,0,8192,8192,0,1` is one pixel, not 64 MB.
         let mut p = 0i64;
         for (i, &r) in ints[4..].iter().enumerate() {
             if r < 0 || r > total - p {
@@ -172,22 +172,13 @@ fn parse_region_counted(
                     &r.to_string(),
                 ));
             }
-            if i % 2 == 1 && r > 0 {
-                let (ra, rb) = (p / w, (p + r - 1) / w);
-                r0 = r0.min(ra);
-                r1 = r1.max(rb);
-                if rb > ra {
-                    (c0, c1) = (0, w - 1);
-                } else {
-                    c0 = c0.min(p % w);
-                    c1 = c1.max((p + r - 1) % w);
-                }
-            }
             p += r;
         }
-        if r1 < 0 {
+        let runs = ints[4..].iter().map(|&r| r as u64);
+        let Some((r0, c0, r1, c1)) = runs_extent(runs, w as u64, total as u64) else {
             return Ok(Region::Mask(Mask::empty()));
-        }
+        };
+        let (r0, c0, r1, c1) = (r0 as i64, c0 as i64, r1 as i64, c1 as i64);
         let (bw, bh) = (c1 - c0 + 1, r1 - r0 + 1);
         *decoded += (bw * bh) as u64;
         if *decoded > MAX_TOTAL_PIXELS {

@@ -72,16 +72,7 @@ pub struct Args {
 }
 
 fn image_size(dir: &Path) -> Option<(u32, u32)> {
-    let mut imgs: Vec<PathBuf> = std::fs::read_dir(dir)
-        .ok()?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| ["jpg", "jpeg", "png"].contains(&e.to_ascii_lowercase().as_str()))
-        })
-        .collect();
-    imgs.sort();
+    let imgs = shapetrack::io::image_files(dir).ok()?;
     image::image_dimensions(imgs.first()?).ok()
 }
 

@@ -17,7 +17,7 @@ use shapetrack::io::motchallenge::{
     SeqInfo,
 };
 use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, write_scalabel, Categories};
-use shapetrack::io::{read_text, write_text, AtomicFile, IoError, Record};
+use shapetrack::io::{image_files, read_text, write_text, AtomicFile, IoError, Record};
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase};
 use shapetrack::track::{detections_by_frame, to_records, Config, Tracker};
 use std::collections::BTreeMap;
@@ -142,63 +142,6 @@ fn scalabel_detections(
         r.id = -1;
     }
     Ok((name, records, cats))
-}
-
-/// The image files of a folder in natural order (`2.png` before `10.png`; MOTChallenge's
-/// zero-padded names sort the same either way).
-fn list_images(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
-    let rd = std::fs::read_dir(dir).map_err(|source| IoError::Io {
-        file: dir.display().to_string(),
-        source,
-    })?;
-    let mut files: Vec<PathBuf> = rd
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "jpg" | "jpeg" | "png"))
-        })
-        .collect();
-    files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
-    Ok(files)
-}
-
-/// Compares names as people number files: runs of digits by value, the rest by character.
-pub(crate) fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
-    use std::cmp::Ordering;
-    fn chunks(s: &str) -> Vec<(bool, &str)> {
-        let mut out = Vec::new();
-        let mut start = 0;
-        let mut digit = None;
-        for (i, c) in s.char_indices() {
-            let d = c.is_ascii_digit();
-            if digit.is_some_and(|p| p != d) {
-                out.push((digit.unwrap_or(false), &s[start..i]));
-                start = i;
-            }
-            digit = Some(d);
-        }
-        if start < s.len() {
-            out.push((digit.unwrap_or(false), &s[start..]));
-        }
-        out
-    }
-    let (ca, cb) = (chunks(a), chunks(b));
-    for ((da, x), (db, y)) in ca.iter().zip(cb.iter()) {
-        let o = if *da && *db {
-            let (tx, ty) = (x.trim_start_matches('0'), y.trim_start_matches('0'));
-            tx.len()
-                .cmp(&ty.len())
-                .then_with(|| tx.cmp(ty))
-                .then_with(|| x.len().cmp(&y.len()))
-        } else {
-            x.cmp(y)
-        };
-        if o != Ordering::Equal {
-            return o;
-        }
-    }
-    ca.len().cmp(&cb.len())
 }
 
 fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
@@ -426,11 +369,7 @@ impl Sink {
             }
             let mut shapes = entry.remove();
             if *mots {
-                for s in &mut shapes {
-                    if s.mask.is_none() {
-                        s.mask = Some(Mask::from_bbox(&s.bbox));
-                    }
-                }
+                boxes_as_masks(&mut shapes);
             }
             let records = to_records(&shapes, ctx.first_frame, ctx.image_size);
             let text = if *mots {
@@ -445,6 +384,13 @@ impl Sink {
                 })?;
         }
         Ok(())
+    }
+}
+
+/// MOTS has no box-only form: boxes are the degenerate case of masks, written filled.
+fn boxes_as_masks(shapes: &mut [TrackedShape]) {
+    for s in shapes.iter_mut().filter(|s| s.mask.is_none()) {
+        s.mask = Some(Mask::from_bbox(&s.bbox));
     }
 }
 
@@ -661,7 +607,7 @@ pub fn run(args: Args) -> crate::CliResult {
         None => last_rec + 1 - first_frame,
     };
     let image_size = seq_size.or(mask_size);
-    let images = args.frames.as_deref().map(list_images).transpose()?;
+    let images = args.frames.as_deref().map(image_files).transpose()?;
     if let (Some(imgs), Some(dir)) = (&images, &args.frames) {
         if (imgs.len() as u64) < num_frames as u64 {
             return Err(format!(
@@ -813,12 +759,7 @@ pub fn run(args: Args) -> crate::CliResult {
 
     if let Some(mut shapes) = shapes {
         if format == Format::Mots {
-            for s in &mut shapes {
-                if s.mask.is_none() {
-                    // Boxes are the degenerate case of masks: write the box as a filled mask.
-                    s.mask = Some(Mask::from_bbox(&s.bbox));
-                }
-            }
+            boxes_as_masks(&mut shapes);
         }
         let out_records = to_records(&shapes, first_frame, image_size);
         let body = match format {
@@ -939,33 +880,6 @@ fn cvat(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn frame_files_sort_as_people_number_them() {
-        let mut names = vec![
-            "12.png",
-            "2.png",
-            "10.png",
-            "1.png",
-            "frame_002.jpg",
-            "frame_10.jpg",
-        ];
-        names.sort_by(|a, b| natural_cmp(a, b));
-        assert_eq!(
-            names,
-            [
-                "1.png",
-                "2.png",
-                "10.png",
-                "12.png",
-                "frame_002.jpg",
-                "frame_10.jpg"
-            ]
-        );
-        let mut padded = vec!["000010.jpg", "000002.jpg", "000001.jpg"];
-        padded.sort_by(|a, b| natural_cmp(a, b));
-        assert_eq!(padded, ["000001.jpg", "000002.jpg", "000010.jpg"]);
-    }
 
     #[test]
     fn json_config_overrides_only_its_fields() {
