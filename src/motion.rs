@@ -100,6 +100,12 @@ pub trait MotionModel {
     fn damp_velocity(&mut self, factor: f64) {
         let _ = factor;
     }
+
+    /// Moves the state's position by `(dx, dy)` pixels (the whole image moved: camera
+    /// motion). Filters without a position ignore it.
+    fn translate(&mut self, dx: f64, dy: f64) {
+        let _ = (dx, dy);
+    }
 }
 
 /// A box filter that can be cloned behind a pointer: what a track owns, so the tracker can keep
@@ -343,6 +349,13 @@ impl MotionModel for BoxKalman {
             for i in 4..8 {
                 self.x[i] *= factor;
             }
+        }
+    }
+
+    fn translate(&mut self, dx: f64, dy: f64) {
+        if dx.is_finite() && dy.is_finite() {
+            self.x[0] += dx;
+            self.x[1] += dy;
         }
     }
 }

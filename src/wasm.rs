@@ -1341,6 +1341,16 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub frame_counts_at: Option<f64>,
+    /// The box reported for a matched box detection: the detection's, the association
+    /// filter's, or (default) the detection smoothed only as far as smoothing agrees with the
+    /// following detections of this sequence.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional, type = "\"detection\" | \"filter\" | \"adaptive\"")]
+    pub report_box: Option<String>,
+    /// Lost tracks follow a camera motion the seen tracks agree on (a pan, a shake).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub camera_motion: Option<bool>,
 }
 
 impl TrackerConfig {

@@ -23,6 +23,21 @@ pub enum ShapeVariant {
     Sift,
 }
 
+/// The box a track reports for a matched box detection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ReportBox {
+    /// The detection's box, as the detector gave it.
+    Detection,
+    /// The association filter's corrected box (what SORT, ByteTrack and OC-SORT report).
+    Filter,
+    /// The detection smoothed per coordinate by the filter (or none) whose estimates best
+    /// agreed with the following detections so far in the sequence (see
+    /// `track::estimate`).
+    #[default]
+    Adaptive,
+}
+
 /// Weight and gate of one pair-cost term.
 ///
 /// A term's cost is in `[0, 1]` (0 = surely the same object). A term with weight 0 is not
@@ -336,6 +351,15 @@ pub struct Config {
     /// The frame rate those frame counts are given at. Default 30 (ByteTrack's convention:
     /// `track_buffer` 30 frames at 30 fps).
     pub frame_counts_at: f64,
+    /// The box a track matched to a box detection reports (mask detections always report
+    /// their mask's box). Default [`ReportBox::Adaptive`]: the detection smoothed only as far
+    /// as smoothing agrees with the following detections on this sequence.
+    pub report_box: ReportBox,
+    /// Tracks unmatched in the last frame follow the camera: when the tracks that were matched
+    /// agree on a common offset between their predictions and this frame's detections (a
+    /// pan, a shake), the others are moved by it before association, so a lost track is looked
+    /// for where the camera took it (see [`super::camera`]). Default true.
+    pub camera_motion: bool,
 }
 
 impl Default for Config {
@@ -401,6 +425,8 @@ impl Default for Config {
             frame_rate: None,
             motion_per_second: true,
             frame_counts_at: 30.0,
+            report_box: ReportBox::Adaptive,
+            camera_motion: true,
         }
     }
 }

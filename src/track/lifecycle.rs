@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use super::amodal::{amodal_box, Cut, REAPPEAR_GAP};
 use super::config::Config;
+use super::estimate::{BoxEstimate, NoiseFit};
 use super::features::{Appearance, Features};
 use crate::frame::{BBox, Detection, Point, TrackState, TrackedShape};
 use crate::geometry::ConvexShell;
@@ -107,6 +108,8 @@ pub struct Track {
     reported_until: u32,
     /// Shapes matched while tentative, reported if the track is confirmed.
     pending: Vec<TrackedShape>,
+    /// The reported box's filters (see [`super::estimate`]).
+    estimate: BoxEstimate,
 }
 
 impl std::fmt::Debug for Track {
@@ -172,6 +175,12 @@ impl Track {
     /// the last appearance (mask, shell) is expected to have moved by the current frame.
     pub fn predicted_shift(&self) -> Point {
         self.predicted.center() - self.anchor.center()
+    }
+
+    /// The box estimate of the last match under the noise `fit` prefers (see
+    /// [`super::estimate`]).
+    pub(crate) fn estimated_box(&self, fit: &NoiseFit) -> BBox {
+        self.estimate.current(fit, &self.last.bbox)
     }
 
     /// The filter's box right after the last match.
@@ -247,6 +256,7 @@ impl Track {
             last: det.clone(),
             features: Some(features.clone()),
             pending: Vec::new(),
+            estimate: BoxEstimate::new(&b),
         }
     }
 
@@ -258,6 +268,24 @@ impl Track {
         }
         self.motion.predict();
         self.predicted = self.motion.project();
+        self.estimate.predict();
+    }
+
+    /// The whole image moved by `(dx, dy)` since the last frame (camera motion, see
+    /// [`super::camera`]): the filter, the prediction, the last box and the reported-box
+    /// filters move with it, so the track is looked for where the camera took it.
+    pub(crate) fn translate(&mut self, dx: f64, dy: f64) {
+        self.motion.translate(dx, dy);
+        if let Some(snap) = &mut self.snapshot {
+            snap.translate(dx, dy);
+        }
+        self.predicted = self.motion.project();
+        let mv = |b: &BBox| BBox::new(b.x + dx, b.y + dy, b.w, b.h);
+        self.anchor = mv(&self.anchor);
+        if self.last.mask.is_none() {
+            self.last.bbox = mv(&self.last.bbox);
+        }
+        self.estimate.translate(dx, dy);
     }
 
     /// A match in tracker frame `frame` with detection `det` (and its `features`): the motion
@@ -270,6 +298,7 @@ impl Track {
         features: &Features,
         frame: u32,
         cfg: &Config,
+        fit: &mut NoiseFit,
     ) -> Result<(), MotionError> {
         let area = features.area;
         let ratio = if self.ref_area > 0.0 && area > 0.0 {
@@ -327,6 +356,9 @@ impl Track {
         }
         if let Some(a) = &features.appearance {
             self.set_appearance(a.clone(), whole);
+        }
+        if det.mask.is_none() {
+            self.estimate.update(&det.bbox, fit);
         }
         self.hits += 1;
         self.misses = 0;
@@ -395,6 +427,7 @@ impl Track {
     /// misses; a confirmed one is lost, and removed after `max_lost`.
     pub(crate) fn miss(&mut self, max_tentative_misses: u32, max_lost: u32) {
         self.misses += 1;
+        self.estimate.missed();
         match self.state {
             TrackState::Tentative if self.misses > max_tentative_misses => {
                 self.state = TrackState::Removed;

@@ -33,10 +33,12 @@
 mod amodal;
 pub mod appearance;
 pub mod associate;
+mod camera;
 pub mod coasting;
 pub mod config;
 pub mod cost;
 mod describe;
+mod estimate;
 pub mod features;
 mod fragments;
 mod lifecycle;
@@ -51,7 +53,7 @@ mod timing;
 pub use appearance::{ColourCost, ColourMode, ShapeContextCost, SiftCost, TrackSide};
 pub use associate::{Stage, StageCosts, StageDetections, StageTracks};
 pub use coasting::Coasting;
-pub use config::{Config, ShapeVariant, TermConfig, Terms};
+pub use config::{Config, ReportBox, ShapeVariant, TermConfig, Terms};
 pub use cost::{
     Candidate, CentreDistanceCost, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,
     MahalanobisCost, MaskIouCost, PairCost, SizeCost, WeightedTerm,

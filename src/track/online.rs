@@ -56,9 +56,10 @@ use std::sync::Arc;
 use super::appearance::{cost_model, ColourMode, TrackSide};
 use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
 use super::coasting::GapStats;
-use super::config::Config;
+use super::config::{Config, ReportBox};
 use super::cost::{CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
+use super::estimate::NoiseFit;
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
 use super::fragments::{merge_fragments, Merge};
 use super::lifecycle::{two_mut, BoxMotion, Track};
@@ -99,6 +100,9 @@ pub struct Tracker {
     /// How this tracker's gaps ended, for adaptive coasting.
     gaps: GapStats,
     timer: Timer,
+    /// How well each smoothing of the reported boxes has agreed with what came next in this
+    /// sequence (see [`super::estimate`]).
+    noise: NoiseFit,
 }
 
 impl std::fmt::Debug for Tracker {
@@ -154,6 +158,7 @@ impl Tracker {
             thresholds,
             gaps: GapStats::default(),
             timer: Timer::default(),
+            noise: NoiseFit::default(),
         })
     }
 
@@ -272,6 +277,9 @@ impl Tracker {
         self.frame += 1;
         let regions = self.timed(Phase::Regions, |t| {
             t.predict();
+            if t.config.camera_motion {
+                t.follow_camera(&dets);
+            }
             t.estimate_regions(&dets)
         });
         self.timed(Phase::Features, |t| t.describe(frame, &regions, &mut dets));
@@ -329,6 +337,13 @@ impl Tracker {
             self.scores.observe(d.score);
         }
         self.scores.thresholds(fixed)
+    }
+
+    /// The smoothing the reported boxes use, per coordinate (centre x, centre y, width,
+    /// height): a process-to-measurement noise ratio of the chosen filter, or `None` for the
+    /// raw detection (see [`Config::report_box`]).
+    pub fn box_smoothing(&self) -> [Option<f64>; 4] {
+        self.noise.chosen_ratios()
     }
 
     /// The score thresholds in force for the last frame.
@@ -546,7 +561,7 @@ impl Tracker {
             if t.id().is_some() {
                 self.gaps.closed(t.misses());
             }
-            t.hit(&d.det, &d.features, frame, &self.config)?;
+            t.hit(&d.det, &d.features, frame, &self.config, &mut self.noise)?;
             let enough = match self.config.birth_evidence {
                 Some(low) => {
                     let w = if d.det.score >= self.thresholds.birth {
@@ -563,14 +578,17 @@ impl Tracker {
                 TrackState::Tentative if enough => confirming.push(*m),
                 TrackState::Tentative => {
                     if report {
-                        t.hold(shape_of(frame, 0, TrackState::Tentative, d, m.cost));
+                        let sh = shape_of(frame, 0, TrackState::Tentative, d, m.cost);
+                        let sh = reported(&self.config, &self.noise, t, sh);
+                        t.hold(sh);
                     }
                 }
                 _ => {
                     t.found();
                     self.scores.observe_matched(d.det.score);
                     if let Some(id) = t.id() {
-                        out.push(shape_of(frame, id, TrackState::Confirmed, d, m.cost));
+                        let sh = shape_of(frame, id, TrackState::Confirmed, d, m.cost);
+                        out.push(reported(&self.config, &self.noise, t, sh));
                         t.reported(frame);
                     }
                 }
@@ -588,7 +606,7 @@ impl Tracker {
                     matched[lost] = true;
                     let (l, newer) = two_mut(&mut self.tracks, lost, m.track);
                     self.gaps.closed(l.misses());
-                    l.hit(&d.det, &d.features, frame, &self.config)?;
+                    l.hit(&d.det, &d.features, frame, &self.config, &mut self.noise)?;
                     l.absorb(newer);
                     lost
                 }
@@ -608,10 +626,23 @@ impl Tracker {
                 out.extend(t.release());
             }
             t.drop_held();
-            out.push(shape_of(frame, id, TrackState::Confirmed, d, m.cost));
+            let sh = shape_of(frame, id, TrackState::Confirmed, d, m.cost);
+            out.push(reported(&self.config, &self.noise, t, sh));
             t.reported(frame);
         }
         Ok(matched)
+    }
+
+    /// Moves the tracks that went unmatched in the last frame by the camera's motion, when
+    /// the tracks that were matched agree on one (see [`super::camera`]). Tracks seen in the
+    /// last frame are left alone: their own detection corrects them.
+    fn follow_camera(&mut self, dets: &[Prepared<'_>]) {
+        let Some(o) = super::camera::common_offset(&self.tracks, dets) else {
+            return;
+        };
+        for t in self.tracks.iter_mut().filter(|t| t.misses() > 0) {
+            t.translate(o.x, o.y);
+        }
     }
 
     /// The lost track that the tentative track `tentative`, about to be confirmed with the
@@ -803,4 +834,22 @@ impl Tracker {
         self.next_id += 1;
         id
     }
+}
+
+/// `shape` (of a detection matched to `t`) with the box the track reports (see
+/// [`Config::report_box`]); mask detections report their mask's box.
+fn reported(config: &Config, fit: &NoiseFit, t: &Track, mut shape: TrackedShape) -> TrackedShape {
+    if shape.mask.is_some() {
+        return shape;
+    }
+    let b = match config.report_box {
+        ReportBox::Detection => return shape,
+        ReportBox::Filter => t.anchor_box(),
+        ReportBox::Adaptive => t.estimated_box(fit),
+    };
+    if b.is_valid() {
+        shape.bbox = b;
+        shape.centroid = b.center();
+    }
+    shape
 }
