@@ -157,6 +157,10 @@ fn scalabel_detections_in_scalabel_tracks_out() {
     let dir = scratch("cli_scalabel");
     let out = dir.join("tracks.json");
     let det = data("bdd100k-sample/box_track/track_predictions.json");
+    // Boxes as detected (the default reports them smoothed once smoothing has proved to
+    // help), so each output box can be found among the detections below.
+    let cfg = dir.join("exact.json");
+    std::fs::write(&cfg, r#"{"report_box": "detection"}"#).unwrap();
     let o = track(&[
         "--det",
         s(&det),
@@ -164,6 +168,8 @@ fn scalabel_detections_in_scalabel_tracks_out() {
         "5",
         "--format",
         "scalabel",
+        "--config",
+        s(&cfg),
         "--out",
         s(&out),
     ]);

@@ -2,7 +2,7 @@
 
 use proptest::prelude::*;
 use shapetrack::frame::{BBox, Detection, Mask, TrackState, TrackedShape};
-use shapetrack::track::{Candidate, Config, PairCost, Track, TrackError, Tracker};
+use shapetrack::track::{Candidate, Config, PairCost, ReportBox, Track, TrackError, Tracker};
 
 fn det(x: f64, y: f64) -> Detection {
     Detection::from_box(BBox::new(x, y, 40.0, 80.0), 0.99)
@@ -374,10 +374,16 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
 
     /// Any valid input: no panic, unique ids per frame, every reported box is one of that
-    /// frame's detections, frames in range, and the same input gives the same output.
+    /// frame's detections (or, with the adaptive box, a finite box of positive size), frames
+    /// in range, and the same input gives the same output.
     #[test]
-    fn arbitrary_detections_give_well_formed_output(frames in random_frames(), min_hits in 1u32..4) {
-        let cfg = Config { min_hits, max_lost: 3, ..Config::default() };
+    fn arbitrary_detections_give_well_formed_output(
+        frames in random_frames(),
+        min_hits in 1u32..4,
+        exact in any::<bool>(),
+    ) {
+        let report_box = if exact { ReportBox::Detection } else { ReportBox::Adaptive };
+        let cfg = Config { min_hits, max_lost: 3, report_box, ..Config::default() };
         let mut t = Tracker::new(cfg.clone()).unwrap();
         let mut all = Vec::new();
         for (k, dets) in frames.iter().enumerate() {
@@ -395,7 +401,14 @@ proptest! {
                 }
                 let src = &frames[s.frame as usize - 1];
                 let i = s.det_index.unwrap();
-                prop_assert_eq!(src[i].bbox, s.bbox);
+                if exact {
+                    prop_assert_eq!(src[i].bbox, s.bbox);
+                } else {
+                    let b = s.bbox;
+                    prop_assert!(i < src.len());
+                    prop_assert!([b.x, b.y, b.w, b.h].iter().all(|v| v.is_finite()));
+                    prop_assert!(b.w >= 0.0 && b.h >= 0.0);
+                }
                 prop_assert!(s.state == TrackState::Confirmed);
                 if s.frame as usize == k + 1 {
                     prop_assert!(seen.insert(s.id), "id {} twice in frame {}", s.id, s.frame);
@@ -412,4 +425,59 @@ proptest! {
             frames.iter().flat_map(|d| again.update(None, d).unwrap()).collect();
         prop_assert_eq!(rerun, all);
     }
+}
+
+/// Five objects 150 px apart; object 0 is hidden in frames 10–12 and back in frame 13, while
+/// the others jump by `jump(i)` px in frame 11 (and stay there). Returns the ids object 0 is
+/// reported with, with and without [`Config::camera_motion`], when it reappears at `back`.
+fn hidden_through_a_jump(jump: impl Fn(usize) -> f64, back: f64) -> [Vec<u64>; 2] {
+    let frames: Vec<Vec<Detection>> = (0..16)
+        .map(|k| {
+            let mut f: Vec<Detection> = (1..5)
+                .map(|i| det(150.0 * i as f64 + if k >= 11 { jump(i) } else { 0.0 }, 0.0))
+                .collect();
+            match k {
+                10..=12 => {}
+                13.. => f.insert(0, det(back, 0.0)),
+                _ => f.insert(0, det(0.0, 0.0)),
+            }
+            f
+        })
+        .collect();
+    [true, false].map(|camera_motion| {
+        let mut t = Tracker::new(Config {
+            camera_motion,
+            ..config()
+        })
+        .unwrap();
+        let out = run(&mut t, &frames);
+        let mut first: Vec<u64> = out
+            .iter()
+            .filter(|s| (s.bbox.x - 0.0).abs() < 1.0 || (s.bbox.x - back).abs() < 1.0)
+            .filter(|s| s.frame <= 10 || s.frame >= 14)
+            .map(|s| s.id)
+            .collect();
+        first.dedup();
+        first
+    })
+}
+
+/// A camera jolt while a track is lost: the tracks still seen agree on the offset, and the
+/// lost one is looked for where the camera took it.
+#[test]
+fn lost_track_follows_the_camera() {
+    let [with, without] = hidden_through_a_jump(|_| 70.0, 70.0);
+    assert_eq!(with, vec![1], "camera motion followed");
+    // Without it the object comes back 70 px (1.75 widths) from where it was lost: a new track.
+    assert_eq!(without.len(), 2, "{without:?}");
+}
+
+/// Objects that do not nearly all move alike (three right, one left: the median is a shift, but
+/// only 3 of 4 agree with it) are not a camera motion: the lost track stays
+/// where it was, and is found there.
+#[test]
+fn disagreeing_motion_moves_no_lost_track() {
+    let [with, without] = hidden_through_a_jump(|i| if i == 1 { -70.0 } else { 70.0 }, 0.0);
+    assert_eq!(with, vec![1]);
+    assert_eq!(without, vec![1]);
 }

@@ -91,26 +91,43 @@ fn default_config_output_is_well_formed_on_all_mot15_sequences() {
             );
         }
 
-        // Every output box is one of that frame's detections, except those coasted over a
-        // missed detection (marked interpolated): at most 8 frames at 30 fps after a whole
-        // view and only where this tracker's gaps of that length usually close, so well under
-        // a tenth of the output.
-        let det_boxes: HashSet<(u32, [u64; 4])> =
-            dets.iter().map(|d| (d.frame, key(&d.bbox))).collect();
+        // Every output box is one of that frame's detections — smoothed, once smoothing has
+        // proved to help on this sequence (`Config::report_box`): it lags a detection that
+        // jumps, so it overlaps one by IoU ≥ 0.3, and nine in ten by ≥ 0.5 — except those
+        // coasted over a missed detection (marked interpolated): at most 8 frames at 30 fps
+        // after a whole view and only where this tracker's gaps of that length usually close,
+        // so well under a tenth of the output.
+        let mut per_frame: std::collections::HashMap<u32, Vec<BBox>> = Default::default();
+        for d in &dets {
+            per_frame.entry(d.frame).or_default().push(d.bbox);
+        }
         let coasted = res.iter().filter(|r| r.flags.interpolated).count();
         assert!(
             coasted * 10 < res.len(),
             "{seq}: {coasted} of {} coasted",
             res.len()
         );
+        let (mut close, mut seen_boxes) = (0, 0);
         for r in res.iter().filter(|r| !r.flags.interpolated) {
+            let best = per_frame
+                .get(&r.frame)
+                .into_iter()
+                .flatten()
+                .map(|b| b.iou(&r.bbox))
+                .fold(0.0, f64::max);
             assert!(
-                det_boxes.contains(&(r.frame, key(&r.bbox))),
-                "{seq}: frame {} box {:?} is not a detection",
+                best >= 0.3,
+                "{seq}: frame {} box {:?} is no detection's (IoU {best})",
                 r.frame,
                 r.bbox
             );
+            seen_boxes += 1;
+            close += usize::from(best >= 0.5);
         }
+        assert!(
+            close * 10 >= seen_boxes * 9,
+            "{seq}: {close} of {seen_boxes}"
+        );
 
         // Ids are dense from 1 (handed out at confirmation).
         let ids: HashSet<i64> = res.iter().map(|r| r.id).collect();
@@ -127,15 +144,12 @@ fn default_config_output_is_well_formed_on_all_mot15_sequences() {
     assert!(total_tracks < 2000, "{total_tracks} tracks");
 }
 
-fn key(b: &BBox) -> [u64; 4] {
-    [b.x.to_bits(), b.y.to_bits(), b.w.to_bits(), b.h.to_bits()]
-}
-
 /// Issue 3's acceptance: one global config, online, box mode, combined HOTA ≥ 36.7 (SORT scores
 /// 36.640 and ByteTrack 36.566 on the same `det.txt`; ../shared/data/README.md). IDF1 and IDSW
 /// must also beat SORT's (47.456, 708). Regression gate: the defaults chosen on the robustness
-/// grid (issue 9) score 37.74 here — 1.3 below the earlier defaults, which were fitted to this
-/// detector alone and lost to the peers elsewhere — and must stay ≥ 37.5.
+/// grid (issue 9) score 38.34 here (38.03 before the adaptive reported box and camera
+/// following; the earlier defaults, fitted to this detector alone, scored 39.02 without frame
+/// rates and lost to the peers elsewhere) and must stay ≥ 37.5.
 #[test]
 fn online_box_mode_beats_the_peers_on_mot15() {
     let inputs: Vec<SequenceInput> = SEQUENCES

@@ -45,6 +45,18 @@ const AGREE_SHARE: f64 = 0.8;
 /// median (≈ 1.25 · MAD-sigma / √n).
 const SIGNIFICANCE: f64 = 3.0;
 
+/// Moves the tracks that went unmatched in the last frame by the camera's motion, when the
+/// tracks that were seen agree on one ([`common_offset`]). Tracks seen in the last frame are
+/// left alone: their own detection corrects them (moving them too lost 0.3 HOTA on the grid).
+pub(crate) fn follow(tracks: &mut [Track], dets: &[Prepared<'_>]) {
+    let Some(o) = common_offset(tracks, dets) else {
+        return;
+    };
+    for t in tracks.iter_mut().filter(|t| t.misses() > 0) {
+        t.translate(o.x, o.y);
+    }
+}
+
 /// The common offset (pixels) between the tracks seen in the previous frame and `dets`, when
 /// significant and agreed on (module docs).
 pub(crate) fn common_offset(tracks: &[Track], dets: &[Prepared<'_>]) -> Option<Point> {

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use super::amodal::{amodal_box, Cut, REAPPEAR_GAP};
-use super::config::Config;
+use super::config::{Config, ReportBox};
 use super::estimate::{BoxEstimate, NoiseFit};
 use super::features::{Appearance, Features};
 use crate::frame::{BBox, Detection, Point, TrackState, TrackedShape};
@@ -177,10 +177,28 @@ impl Track {
         self.predicted.center() - self.anchor.center()
     }
 
-    /// The box estimate of the last match under the noise `fit` prefers (see
-    /// [`super::estimate`]).
-    pub(crate) fn estimated_box(&self, fit: &NoiseFit) -> BBox {
-        self.estimate.current(fit, &self.last.bbox)
+    /// `shape` (of a detection matched to this track) with the box the track reports (see
+    /// [`Config::report_box`] and [`super::estimate`]); mask detections report their mask's
+    /// box.
+    pub(crate) fn reported_shape(
+        &self,
+        config: &Config,
+        fit: &NoiseFit,
+        mut shape: TrackedShape,
+    ) -> TrackedShape {
+        if shape.mask.is_some() {
+            return shape;
+        }
+        let b = match config.report_box {
+            ReportBox::Detection => return shape,
+            ReportBox::Filter => self.anchor,
+            ReportBox::Adaptive => self.estimate.current(fit, &self.last.bbox),
+        };
+        if b.is_valid() {
+            shape.bbox = b;
+            shape.centroid = b.center();
+        }
+        shape
     }
 
     /// The filter's box right after the last match.

@@ -56,7 +56,7 @@ use std::sync::Arc;
 use super::appearance::{cost_model, ColourMode, TrackSide};
 use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
 use super::coasting::GapStats;
-use super::config::{Config, ReportBox};
+use super::config::Config;
 use super::cost::{CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::estimate::NoiseFit;
@@ -278,7 +278,7 @@ impl Tracker {
         let regions = self.timed(Phase::Regions, |t| {
             t.predict();
             if t.config.camera_motion {
-                t.follow_camera(&dets);
+                super::camera::follow(&mut t.tracks, &dets);
             }
             t.estimate_regions(&dets)
         });
@@ -337,13 +337,6 @@ impl Tracker {
             self.scores.observe(d.score);
         }
         self.scores.thresholds(fixed)
-    }
-
-    /// The smoothing the reported boxes use, per coordinate (centre x, centre y, width,
-    /// height): a process-to-measurement noise ratio of the chosen filter, or `None` for the
-    /// raw detection (see [`Config::report_box`]).
-    pub fn box_smoothing(&self) -> [Option<f64>; 4] {
-        self.noise.chosen_ratios()
     }
 
     /// The score thresholds in force for the last frame.
@@ -579,7 +572,7 @@ impl Tracker {
                 TrackState::Tentative => {
                     if report {
                         let sh = shape_of(frame, 0, TrackState::Tentative, d, m.cost);
-                        let sh = reported(&self.config, &self.noise, t, sh);
+                        let sh = t.reported_shape(&self.config, &self.noise, sh);
                         t.hold(sh);
                     }
                 }
@@ -588,7 +581,7 @@ impl Tracker {
                     self.scores.observe_matched(d.det.score);
                     if let Some(id) = t.id() {
                         let sh = shape_of(frame, id, TrackState::Confirmed, d, m.cost);
-                        out.push(reported(&self.config, &self.noise, t, sh));
+                        out.push(t.reported_shape(&self.config, &self.noise, sh));
                         t.reported(frame);
                     }
                 }
@@ -627,22 +620,10 @@ impl Tracker {
             }
             t.drop_held();
             let sh = shape_of(frame, id, TrackState::Confirmed, d, m.cost);
-            out.push(reported(&self.config, &self.noise, t, sh));
+            out.push(t.reported_shape(&self.config, &self.noise, sh));
             t.reported(frame);
         }
         Ok(matched)
-    }
-
-    /// Moves the tracks that went unmatched in the last frame by the camera's motion, when
-    /// the tracks that were matched agree on one (see [`super::camera`]). Tracks seen in the
-    /// last frame are left alone: their own detection corrects them.
-    fn follow_camera(&mut self, dets: &[Prepared<'_>]) {
-        let Some(o) = super::camera::common_offset(&self.tracks, dets) else {
-            return;
-        };
-        for t in self.tracks.iter_mut().filter(|t| t.misses() > 0) {
-            t.translate(o.x, o.y);
-        }
     }
 
     /// The lost track that the tentative track `tentative`, about to be confirmed with the
@@ -834,22 +815,4 @@ impl Tracker {
         self.next_id += 1;
         id
     }
-}
-
-/// `shape` (of a detection matched to `t`) with the box the track reports (see
-/// [`Config::report_box`]); mask detections report their mask's box.
-fn reported(config: &Config, fit: &NoiseFit, t: &Track, mut shape: TrackedShape) -> TrackedShape {
-    if shape.mask.is_some() {
-        return shape;
-    }
-    let b = match config.report_box {
-        ReportBox::Detection => return shape,
-        ReportBox::Filter => t.anchor_box(),
-        ReportBox::Adaptive => t.estimated_box(fit),
-    };
-    if b.is_valid() {
-        shape.bbox = b;
-        shape.centroid = b.center();
-    }
-    shape
 }
