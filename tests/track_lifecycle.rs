@@ -427,17 +427,18 @@ proptest! {
     }
 }
 
-/// Five objects 150 px apart; object 0 is hidden in frames 10–12 and back in frame 13, while
-/// the others jump by `jump(i)` px in frame 11 (and stay there). Returns the ids object 0 is
-/// reported with, with and without [`Config::camera_motion`], when it reappears at `back`.
-fn hidden_through_a_jump(jump: impl Fn(usize) -> f64, back: f64) -> [Vec<u64>; 2] {
+/// Five objects 150 px apart; object 0 is hidden from frame `hide` (0-based) to 12 and back in
+/// frame 13, while the others jump by `jump(i)` px in frame 11 (and stay there). Returns the
+/// ids object 0 is reported with, with and without [`Config::camera_motion`], when it
+/// reappears at `back`.
+fn hidden_through_a_jump(hide: usize, jump: impl Fn(usize) -> f64, back: f64) -> [Vec<u64>; 2] {
     let frames: Vec<Vec<Detection>> = (0..16)
         .map(|k| {
             let mut f: Vec<Detection> = (1..5)
                 .map(|i| det(150.0 * i as f64 + if k >= 11 { jump(i) } else { 0.0 }, 0.0))
                 .collect();
             match k {
-                10..=12 => {}
+                _ if (hide..=12).contains(&k) => {}
                 13.. => f.insert(0, det(back, 0.0)),
                 _ => f.insert(0, det(0.0, 0.0)),
             }
@@ -462,14 +463,17 @@ fn hidden_through_a_jump(jump: impl Fn(usize) -> f64, back: f64) -> [Vec<u64>; 2
     })
 }
 
-/// A camera jolt while a track is lost: the tracks still seen agree on the offset, and the
-/// lost one is looked for where the camera took it.
+/// A camera jolt while a track is lost, or in the very frame it is first missed: the tracks
+/// still seen agree on the offset, and the lost one is looked for where the camera took it.
 #[test]
 fn lost_track_follows_the_camera() {
-    let [with, without] = hidden_through_a_jump(|_| 70.0, 70.0);
-    assert_eq!(with, vec![1], "camera motion followed");
-    // Without it the object comes back 70 px (1.75 widths) from where it was lost: a new track.
-    assert_eq!(without.len(), 2, "{without:?}");
+    for hide in [10, 11] {
+        let [with, without] = hidden_through_a_jump(hide, |_| 70.0, 70.0);
+        assert_eq!(with, vec![1], "camera motion followed (hidden from {hide})");
+        // Without it the object comes back 70 px (1.75 widths) from where it was lost: a new
+        // track.
+        assert_eq!(without.len(), 2, "{without:?}");
+    }
 }
 
 /// Objects that do not nearly all move alike (three right, one left: the median is a shift, but
@@ -477,7 +481,7 @@ fn lost_track_follows_the_camera() {
 /// where it was, and is found there.
 #[test]
 fn disagreeing_motion_moves_no_lost_track() {
-    let [with, without] = hidden_through_a_jump(|i| if i == 1 { -70.0 } else { 70.0 }, 0.0);
+    let [with, without] = hidden_through_a_jump(10, |i| if i == 1 { -70.0 } else { 70.0 }, 0.0);
     assert_eq!(with, vec![1]);
     assert_eq!(without, vec![1]);
 }

@@ -46,13 +46,28 @@ const AGREE_SHARE: f64 = 0.8;
 const SIGNIFICANCE: f64 = 3.0;
 
 /// Moves the tracks that went unmatched in the last frame by the camera's motion, when the
-/// tracks that were seen agree on one ([`common_offset`]). Tracks seen in the last frame are
-/// left alone: their own detection corrects them (moving them too lost 0.3 HOTA on the grid).
-pub(crate) fn follow(tracks: &mut [Track], dets: &[Prepared<'_>]) {
-    let Some(o) = common_offset(tracks, dets) else {
-        return;
-    };
+/// tracks that were seen agree on one ([`common_offset`]), and returns it: the tracks seen in
+/// the last frame are left alone (their own detection corrects them; moving them too lost 0.3
+/// HOTA on the grid), and those of them that go unmatched in this frame follow it after the
+/// association ([`follow_missed`]). Nothing when `enabled` ([`Config::camera_motion`]) is off.
+///
+/// [`Config::camera_motion`]: super::Config::camera_motion
+pub(crate) fn follow(tracks: &mut [Track], dets: &[Prepared<'_>], enabled: bool) -> Option<Point> {
+    if !enabled {
+        return None;
+    }
+    let o = common_offset(tracks, dets)?;
     for t in tracks.iter_mut().filter(|t| t.misses() > 0) {
+        t.translate(o.x, o.y);
+    }
+    Some(o)
+}
+
+/// A track seen in the last frame and missed in this one, in a frame where the camera moved
+/// by `offset` ([`follow`]): it was left where its filter put it, so it follows the camera
+/// now, before its miss is counted.
+pub(crate) fn follow_missed(t: &mut Track, offset: Option<Point>) {
+    if let (Some(o), 0) = (offset, t.misses()) {
         t.translate(o.x, o.y);
     }
 }
