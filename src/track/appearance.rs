@@ -67,6 +67,10 @@ impl PairCost for ShapeContextCost {
         "shape_context"
     }
 
+    fn expensive(&self) -> bool {
+        true
+    }
+
     fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
         let (a, b) = (self.side.of(track)?, det_appearance(det)?);
         let (sa, sb) = (a.shape.as_ref()?, b.shape.as_ref()?);
@@ -137,6 +141,10 @@ impl PairCost for ColourCost {
         "colour"
     }
 
+    fn expensive(&self) -> bool {
+        true
+    }
+
     fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
         let (a, b) = (self.side.of(track)?, det_appearance(det)?);
         let (ca, cb) = (a.colour.as_ref()?, b.colour.as_ref()?);
@@ -183,6 +191,10 @@ impl PairCost for SiftCost {
         "sift"
     }
 
+    fn expensive(&self) -> bool {
+        true
+    }
+
     fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
         let (a, b) = (self.side.of(track)?, det_appearance(det)?);
         let (ka, kb) = (a.sift.as_ref()?, b.sift.as_ref()?);
@@ -194,6 +206,29 @@ impl PairCost for SiftCost {
         Some(1.0 - m as f64 / n as f64)
     }
 }
+/// The cost models of the main association (the last view, colour as the thesis aligns it)
+/// and of re-identification (the reference view, colour by containment), each skipping the
+/// appearance of pairs it could not accept ([`CostModel::with_prefilter`]): the main scores
+/// serve the stages up to their highest threshold (fragments merge under `max_cost` too), the
+/// re-identification scores `reid_max_cost`.
+pub(crate) fn cost_models(config: &Config) -> (CostModel, CostModel) {
+    let main_max = [
+        config.max_cost,
+        config.max_cost_low,
+        config.max_cost_tentative,
+    ];
+    let main = cost_model(&config.terms, config, TrackSide::Last, ColourMode::Aligned)
+        .with_prefilter(main_max.into_iter().fold(f64::MIN, f64::max));
+    let reid = cost_model(
+        &config.reid_terms,
+        config,
+        TrackSide::Reference,
+        ColourMode::Contained,
+    )
+    .with_prefilter(config.reid_max_cost);
+    (main, reid)
+}
+
 /// The cost model of one association: the geometric and motion terms of `terms` and the
 /// appearance terms registered here (those with a positive weight), reading the track's
 /// `side` appearance, colour compared as `colour`.

@@ -42,6 +42,13 @@ pub trait PairCost: Send {
     fn normalise_in_cluster(&self) -> bool {
         false
     }
+
+    /// Whether the term is expensive (appearance: k-means, descriptor matching): with a
+    /// [`CostModel::with_prefilter`] threshold it is computed only for pairs the cheap terms
+    /// leave acceptable. Default: no.
+    fn expensive(&self) -> bool {
+        false
+    }
 }
 
 /// `1 − IoU` between the track's predicted box and the detection, both optionally grown by a
@@ -247,6 +254,8 @@ impl std::fmt::Debug for WeightedTerm {
 #[derive(Debug, Default)]
 pub struct CostModel {
     terms: Vec<WeightedTerm>,
+    /// The highest cost any user of these scores accepts (see [`CostModel::with_prefilter`]).
+    prefilter: Option<f64>,
 }
 
 impl CostModel {
@@ -254,6 +263,17 @@ impl CostModel {
     /// appearance terms are not built in: their modules register them with [`CostModel::push`].
     pub fn from_terms(terms: &Terms) -> Self {
         Self::from_terms_with(terms, 0.0)
+    }
+
+    /// Skips the expensive terms ([`PairCost::expensive`]) of a pair that no value of theirs
+    /// could bring within `max_cost` (its cost compared with thresholds, even with every
+    /// expensive term at 0, is above it) or that a cheap term gates: such a pair is never
+    /// matched, so its appearance need not be compared. In a crowded cluster this skips most
+    /// pairs. The cluster normalisation of an expensive term then runs over the pairs that
+    /// could match (issue 10: bounded work per cluster).
+    pub fn with_prefilter(mut self, max_cost: f64) -> Self {
+        self.prefilter = Some(max_cost);
+        self
     }
 
     /// [`CostModel::from_terms`], with the IoA term's buffer widening by `ioa_per_miss` per
@@ -365,14 +385,46 @@ impl CostModel {
         let nt = self.terms.len();
         let np = regions.pairs.len();
         let mut raw: Vec<Option<f64>> = Vec::with_capacity(np * nt);
+        // Weight of the expensive terms that count towards the thresholded cost.
+        let expensive_weight: f64 = self
+            .terms
+            .iter()
+            .filter(|w| w.term.expensive() && !w.term.normalise_in_cluster())
+            .map(|w| w.weight)
+            .sum();
+        let any_expensive = self.terms.iter().any(|w| w.term.expensive());
+        let prefilter = self.prefilter.filter(|_| any_expensive);
         for &(ti, di) in &regions.pairs {
-            match (tracks.get(ti), dets.get(di)) {
-                (Some(t), Some(d)) => raw.extend(
-                    self.terms
-                        .iter()
-                        .map(|w| w.term.cost(t, d).filter(|c| c.is_finite())),
-                ),
-                _ => raw.extend(std::iter::repeat_n(None, nt)),
+            let (Some(t), Some(d)) = (tracks.get(ti), dets.get(di)) else {
+                raw.extend(std::iter::repeat_n(None, nt));
+                continue;
+            };
+            let start = raw.len();
+            raw.extend(self.terms.iter().map(|w| {
+                (!w.term.expensive())
+                    .then(|| w.term.cost(t, d).filter(|c| c.is_finite()))
+                    .flatten()
+            }));
+            let cheap = &raw[start..];
+            let hopeless = prefilter.is_some_and(|max_cost| {
+                let (mut num, mut den, mut gated) = (0.0, 0.0, false);
+                for (w, c) in self.terms.iter().zip(cheap) {
+                    if let Some(c) = c {
+                        gated |= w.gate.is_some_and(|g| *c > g);
+                        if !w.term.normalise_in_cluster() {
+                            num += w.weight * c;
+                            den += w.weight;
+                        }
+                    }
+                }
+                gated || (den > 0.0 && num / (den + expensive_weight) > max_cost)
+            });
+            if !hopeless {
+                for (k, w) in self.terms.iter().enumerate() {
+                    if w.term.expensive() {
+                        raw[start + k] = w.term.cost(t, d).filter(|c| c.is_finite());
+                    }
+                }
             }
         }
         let gated: Vec<bool> = raw
@@ -491,5 +543,77 @@ mod tests {
         // Zero weight disables a term entirely.
         m.push(Box::new(Fixed(Some(1.0))), 0.0, None);
         assert_eq!(m.terms().len(), 3);
+    }
+
+    /// An expensive term that counts its calls.
+    struct Counting(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+    impl PairCost for Counting {
+        fn name(&self) -> &str {
+            "counting"
+        }
+        fn cost(&self, _: &Track, _: &Candidate<'_>) -> Option<f64> {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Some(0.0)
+        }
+        fn expensive(&self) -> bool {
+            true
+        }
+    }
+
+    #[test]
+    fn prefilter_skips_the_expensive_terms_of_pairs_that_cannot_match() {
+        use crate::motion::BoxKalman;
+        use crate::track::regions::Cluster;
+        use crate::track::Config;
+        let b = BBox::new(0.0, 0.0, 40.0, 80.0);
+        let motion = Box::new(BoxKalman::new(&b, Config::default().motion_params()).unwrap());
+        let det = Detection::from_box(b, 1.0);
+        let track = Track::born(&det, &Features::default(), motion, None, 1, false);
+        // One detection where the track is, one beside it (IoU 0), one overlapping by half.
+        let dets =
+            [0.0, 200.0, 20.0].map(|x| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), 1.0));
+        let cands: Vec<Candidate<'_>> = dets
+            .iter()
+            .enumerate()
+            .map(|(index, detection)| Candidate {
+                index,
+                detection,
+                features: None,
+            })
+            .collect();
+        let regions = Regions {
+            pairs: vec![(0, 0), (0, 1), (0, 2)],
+            pair_cluster: vec![0, 0, 0],
+            clusters: vec![Cluster {
+                tracks: vec![0],
+                dets: vec![0, 1, 2],
+            }],
+        };
+        let calls = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let model = |prefilter: Option<f64>| {
+            let mut m = CostModel::default();
+            m.push(Box::new(IouCost { buffer: 1.0 }), 1.0, None);
+            m.push(Box::new(Counting(calls.clone())), 1.0, None);
+            match prefilter {
+                Some(p) => m.with_prefilter(p),
+                None => m,
+            }
+        };
+        let tracks = [track];
+        let all = model(None).score_pairs(&tracks, &cands, &regions);
+        assert_eq!(calls.swap(0, std::sync::atomic::Ordering::Relaxed), 3);
+        let some = model(Some(0.8)).score_pairs(&tracks, &cands, &regions);
+        // The far pair: IoU cost 1, so even an expensive cost of 0 leaves (1 + 0) / 2 = 0.5,
+        // within 0.8: computed. At 0.4 it is hopeless and skipped; the half-overlap pair
+        // (IoU 1/3: cost 2/3, bound 1/3) is still computed.
+        assert_eq!(calls.swap(0, std::sync::atomic::Ordering::Relaxed), 3);
+        assert_eq!(all, some);
+        let strict = model(Some(0.4)).score_pairs(&tracks, &cands, &regions);
+        assert_eq!(calls.swap(0, std::sync::atomic::Ordering::Relaxed), 2);
+        // The skipped pair keeps its cheap cost, above the threshold: no stage takes it.
+        let far = strict[1].unwrap();
+        assert!(far.absolute > 0.4, "{far:?}");
+        assert_eq!(strict[0], all[0]);
+        assert_eq!(strict[2], all[2]);
     }
 }

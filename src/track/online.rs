@@ -53,7 +53,7 @@
 use std::borrow::Cow;
 use std::sync::Arc;
 
-use super::appearance::{cost_model, ColourMode, TrackSide};
+use super::appearance::cost_models;
 use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
 use super::coasting::GapStats;
 use super::config::Config;
@@ -131,13 +131,7 @@ impl Tracker {
         let motion: MotionBuilder = Box::new(move |z: &BBox| -> Result<BoxMotion, MotionError> {
             Ok(Box::new(BoxKalman::new(z, params)?))
         });
-        let costs = cost_model(&config.terms, &config, TrackSide::Last, ColourMode::Aligned);
-        let reid_costs = cost_model(
-            &config.reid_terms,
-            &config,
-            TrackSide::Reference,
-            ColourMode::Contained,
-        );
+        let (costs, reid_costs) = cost_models(&config);
         let needs = config.appearance_needs();
         let scores = ScoreStats::new(config.score_adaptation.unwrap_or_default());
         let thresholds = Thresholds {
