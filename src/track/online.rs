@@ -55,6 +55,7 @@ use std::sync::Arc;
 
 use super::appearance::cost_models;
 use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
+use super::camera::Camera;
 use super::coasting::GapStats;
 use super::config::Config;
 use super::cost::{CostModel, PairCost};
@@ -69,7 +70,7 @@ use super::scores::{ScoreStats, Thresholds};
 use super::timing::{Phase, PhaseTimes, Timer};
 use super::TrackError;
 use crate::assign::Unmatched;
-use crate::frame::{BBox, Detection, Frame, Point, TrackState, TrackedShape};
+use crate::frame::{BBox, Detection, Frame, TrackState, TrackedShape};
 use crate::geometry::ConvexShell;
 use crate::motion::{BoxKalman, MotionError, MotionFactory};
 use crate::region::region_clusters;
@@ -100,8 +101,8 @@ pub struct Tracker {
     /// How this tracker's gaps ended, for adaptive coasting.
     gaps: GapStats,
     timer: Timer,
-    /// The camera's motion in this frame, when the tracks agreed on one.
-    camera: Option<Point>,
+    /// The camera's motion as followed so far.
+    camera: Camera,
     /// How well each smoothing of the reported boxes has agreed with what came next in this
     /// sequence (see [`super::estimate`]).
     noise: NoiseFit,
@@ -154,7 +155,7 @@ impl Tracker {
             thresholds,
             gaps: GapStats::default(),
             timer: Timer::default(),
-            camera: None,
+            camera: Camera::default(),
             noise: NoiseFit::default(),
         })
     }
@@ -274,7 +275,8 @@ impl Tracker {
         self.frame += 1;
         let regions = self.timed(Phase::Regions, |t| {
             t.predict();
-            t.camera = super::camera::follow(&mut t.tracks, &dets, t.config.camera_motion);
+            t.camera
+                .follow(&mut t.tracks, &dets, t.config.camera_motion);
             t.estimate_regions(&dets)
         });
         self.timed(Phase::Features, |t| t.describe(frame, &regions, &mut dets));
@@ -714,7 +716,7 @@ impl Tracker {
         );
         for (i, t) in self.tracks.iter_mut().enumerate() {
             if !matched.get(i).copied().unwrap_or(false) {
-                super::camera::follow_missed(t, self.camera);
+                self.camera.follow_missed(t);
                 t.miss(tentative, lost);
                 if t.state() == TrackState::Removed && t.id().is_some() {
                     self.gaps.ended(t.misses());

@@ -117,13 +117,34 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   assert.ok(!merged.ids.includes(pick.b.id), 'the second track is gone');
   assert.ok(merged.canUndo);
 
+  // The status line says what the last edit did, never an earlier message.
+  const status = () => page.textContent('#status').then((t) => t ?? '');
+  assert.match(await status(), /merge/);
+
   // Undo and redo through the keyboard.
   await page.keyboard.press('Control+z');
   let ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
   assert.ok(ids.includes(pick.b.id), 'undo brings the track back');
+  assert.match(await status(), /^undid: .*merge/, 'the status line follows undo');
   await page.keyboard.press('Control+Shift+z');
   ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
   assert.ok(!ids.includes(pick.b.id), 'redo merges again');
+  assert.match(await status(), /^redid: .*merge/, 'the status line follows redo');
+
+  // Renumber (N, type, Enter): the track keeps its selection under the new id, the status
+  // line says so; undone, the old number comes back (and the state before is restored for
+  // the export below).
+  await page.keyboard.press('n');
+  await page.fill('#renumber-input', '777');
+  await page.press('#renumber-input', 'Enter');
+  const renumbered = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.ok(renumbered.ids.includes(777) && !renumbered.ids.includes(pick.a.id));
+  assert.deepEqual(renumbered.selection, { a: 777, b: null }, 'selection follows the new id');
+  assert.match(await status(), new RegExp(`renumber ${pick.a.id} as 777`));
+  await page.keyboard.press('Control+z');
+  ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
+  assert.ok(ids.includes(pick.a.id) && !ids.includes(777));
+  assert.match(await status(), /^undid: renumber/);
 
   // Export through the UI and compare with the expectation built from the state before.
   await page.selectOption('#export-format', 'mot');

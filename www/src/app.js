@@ -105,7 +105,12 @@ export class App {
     this.panel = new Panel({
       onSelect: (id, add) => this.select(id, add),
       onAction: (a) => this.action(a),
-      onRenumber: (to) => this.edit(() => this.model.reassign(this.need(this.selection.a), to)),
+      // The renumbered track stays selected under its new id.
+      onRenumber: (to) =>
+        this.edit(() => {
+          this.model.reassign(this.need(this.selection.a), to);
+          this.selection = { a: to, b: null };
+        }),
     });
     this.model.subscribe(() => {
       this.validateSelection();
@@ -492,13 +497,16 @@ export class App {
   }
 
   /**
-   * Runs an edit, reporting a refusal in the status line instead of throwing.
-   * @param {() => unknown} fn
+   * Runs an edit, reporting a refusal in the status line instead of throwing. The status line
+   * then says what was done (or `fn`'s own note about it), so it never shows a message about
+   * an earlier state.
+   * @param {() => string | void} fn
    */
   edit(fn) {
     try {
-      fn();
+      const note = fn();
       this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
+      this.status(note || this.lastEdit);
       this.render();
       return true;
     } catch (e) {
@@ -518,7 +526,7 @@ export class App {
         this.edit(() => {
           if (y === null) throw new EditError('shift-click a second track to merge into the first');
           const { dropped } = this.model.merge(this.need(x), y);
-          if (dropped) this.status(`merged; ${dropped} duplicate frame(s) kept from ${x}`);
+          if (dropped) return `merged; ${dropped} duplicate frame(s) kept from ${x}`;
         });
         break;
       case 'swap':
@@ -546,12 +554,14 @@ export class App {
       case 'undo': {
         const l = this.model.undo();
         this.lastEdit = l ? `undid: ${l}` : '';
+        this.status(this.lastEdit || 'nothing to undo');
         this.render();
         break;
       }
       case 'redo': {
         const l = this.model.redo();
         this.lastEdit = l ? `redid: ${l}` : '';
+        this.status(this.lastEdit || 'nothing to redo');
         this.render();
         break;
       }

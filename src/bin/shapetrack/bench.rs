@@ -178,11 +178,55 @@ pub fn run(args: Args) -> crate::CliResult {
             }
         }
     }
+    for line in scaling(&rows) {
+        println!("{line}");
+    }
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&rows)?;
         shapetrack::io::write_text(path, &text)?;
     }
     Ok(())
+}
+
+/// Per resolution and mode, how the time per frame grows from the fewest shapes measured to
+/// the most, against how the shapes grew (linear work would grow alike): issue 10's target is
+/// 200 shapes at most 12× the 20-shape time. Ratios within one run, so a busy machine slows
+/// both ends alike.
+fn scaling(rows: &[Row]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut keys: Vec<(u32, u32, Mode)> = Vec::new();
+    for r in rows {
+        if !keys.contains(&(r.width, r.height, r.mode)) {
+            keys.push((r.width, r.height, r.mode));
+        }
+    }
+    for (w, h, mode) in keys {
+        let group: Vec<&Row> = rows
+            .iter()
+            .filter(|r| (r.width, r.height, r.mode) == (w, h, mode))
+            .collect();
+        let (Some(lo), Some(hi)) = (
+            group.iter().min_by_key(|r| r.shapes),
+            group.iter().max_by_key(|r| r.shapes),
+        ) else {
+            continue;
+        };
+        if hi.shapes <= lo.shapes || lo.ms_per_frame <= 0.0 {
+            continue;
+        }
+        out.push(format!(
+            "scaling {w}x{h} {}: {} vs {} shapes (×{:.1}): time ×{:.1}",
+            match mode {
+                Mode::Box => "box",
+                Mode::Mask => "mask",
+            },
+            hi.shapes,
+            lo.shapes,
+            hi.shapes as f64 / lo.shapes as f64,
+            hi.ms_per_frame / lo.ms_per_frame
+        ));
+    }
+    out
 }
 
 #[cfg(test)]
@@ -196,5 +240,45 @@ mod tests {
         assert!(parse_resolution("640").is_err());
         assert!(parse_resolution("0x10").is_err());
         assert!(parse_resolution("ax10").is_err());
+    }
+
+    fn row(shapes: u32, mode: Mode, ms: f64) -> Row {
+        Row {
+            width: 640,
+            height: 480,
+            shapes,
+            mode,
+            frames: 10,
+            detections_per_frame: shapes as f64,
+            fps: 1e3 / ms,
+            ms_per_frame: ms,
+            features_ms: 0.0,
+            regions_ms: 0.0,
+            costs_ms: 0.0,
+            assignment_ms: 0.0,
+            update_ms: 0.0,
+        }
+    }
+
+    #[test]
+    fn scaling_compares_the_fewest_and_most_shapes_per_mode() {
+        let rows = [
+            row(20, Mode::Box, 1.0),
+            row(20, Mode::Mask, 5.0),
+            row(50, Mode::Box, 2.0),
+            row(50, Mode::Mask, 30.0),
+            row(200, Mode::Box, 9.0),
+            row(200, Mode::Mask, 400.0),
+        ];
+        // Rows come per shape count, modes interleaved: one line per (resolution, mode).
+        let lines = scaling(&rows);
+        assert_eq!(
+            lines,
+            [
+                "scaling 640x480 box: 200 vs 20 shapes (×10.0): time ×9.0",
+                "scaling 640x480 mask: 200 vs 20 shapes (×10.0): time ×80.0"
+            ]
+        );
+        assert!(scaling(&rows[..2]).is_empty());
     }
 }
