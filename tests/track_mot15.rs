@@ -147,7 +147,7 @@ fn default_config_output_is_well_formed_on_all_mot15_sequences() {
 /// Issue 3's acceptance: one global config, online, box mode, combined HOTA ≥ 36.7 (SORT scores
 /// 36.640 and ByteTrack 36.566 on the same `det.txt`; ../shared/data/README.md). IDF1 and IDSW
 /// must also beat SORT's (47.456, 708). Regression gate: the defaults chosen on the robustness
-/// grid (issue 9) score 38.50 here (38.03 before the adaptive reported box and camera
+/// grid (issue 9) score 38.76 here (38.03 before the adaptive reported box and camera
 /// following; the earlier defaults, fitted to this detector alone, scored 39.02 without frame
 /// rates and lost to the peers elsewhere) and must stay ≥ 37.5.
 #[test]
