@@ -17,7 +17,8 @@
 
 use super::lifecycle::Track;
 use super::prepare::Prepared;
-use crate::frame::{Point, TrackState};
+use crate::frame::{BBox, Point, TrackState};
+use crate::geometry::overlapping_box_pairs;
 
 /// Fewest agreeing (track, detection) pairs for an estimate.
 const MIN_PAIRS: usize = 3;
@@ -102,7 +103,7 @@ pub(crate) fn common_offset(tracks: &[Track], dets: &[Prepared<'_>]) -> Option<P
     if witnesses.len() < MIN_PAIRS || dets.len() < MIN_PAIRS {
         return None;
     }
-    let size = |b: &crate::frame::BBox| (b.w.max(1.0) * b.h.max(1.0)).sqrt();
+    let size = |b: &BBox| (b.w.max(1.0) * b.h.max(1.0)).sqrt();
     let close = |t: usize, d: usize| -> Option<f64> {
         let (p, b) = (tracks[t].predicted_box(), dets[d].det.bbox);
         let (sp, sb) = (size(&p), size(&b));
@@ -110,27 +111,50 @@ pub(crate) fn common_offset(tracks: &[Track], dets: &[Prepared<'_>]) -> Option<P
         let dist = b.center().dist(p.center()) / sp;
         (ratio <= MAX_SIZE_RATIO && dist <= MAX_DISTANCE).then_some(dist)
     };
-    let nearest_det = |t: usize| {
-        (0..dets.len())
-            .filter(|&d| dets[d].high)
-            .filter_map(|d| close(t, d).map(|c| (d, c)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(d, _)| d)
-    };
-    let nearest_track = |d: usize| {
-        witnesses
-            .iter()
-            .filter_map(|&t| close(t, d).map(|c| (t, c)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(t, _)| t)
-    };
-    // (displacement, track size) of the mutual nearest pairs.
-    let pairs: Vec<(Point, f64)> = witnesses
+    // Candidate pairs from the project's sort-and-sweep broad phase (a detection's centre in
+    // the square around a witness's prediction that holds its `MAX_DISTANCE` circle), not
+    // every witness against every detection: this runs every frame, and with hundreds of
+    // boxes the double loop cost more than the rest of box-mode tracking.
+    let reach: Vec<BBox> = witnesses
         .iter()
-        .filter_map(|&t| {
-            let d = nearest_det(t)?;
-            (nearest_track(d) == Some(t)).then(|| {
-                let p = tracks[t].predicted_box();
+        .map(|&t| {
+            let p = tracks[t].predicted_box();
+            let r = 2.0 * MAX_DISTANCE * size(&p);
+            BBox::from_center(p.center(), r, r)
+        })
+        .collect();
+    // Only confident detections witness (a non-finite box matches nothing).
+    let centres: Vec<BBox> = dets
+        .iter()
+        .map(|d| match d.high {
+            true => BBox::from_center(d.det.bbox.center(), 0.0, 0.0),
+            false => BBox::new(f64::NAN, f64::NAN, 0.0, 0.0),
+        })
+        .collect();
+    // Per witness its nearest detection, per detection its nearest witness (the first of
+    // equals, in index order).
+    let mut det_of = vec![None::<(usize, f64)>; witnesses.len()];
+    let mut witness_of = vec![None::<(usize, f64)>; dets.len()];
+    let nearer = |best: &Option<(usize, f64)>, c: f64| {
+        best.is_none_or(|(_, b)| c.total_cmp(&b) == std::cmp::Ordering::Less)
+    };
+    for (k, d) in overlapping_box_pairs(&reach, &centres, 0.0) {
+        let Some(c) = close(witnesses[k], d) else {
+            continue;
+        };
+        if nearer(&det_of[k], c) {
+            det_of[k] = Some((d, c));
+        }
+        if nearer(&witness_of[d], c) {
+            witness_of[d] = Some((k, c));
+        }
+    }
+    // (displacement, track size) of the mutual nearest pairs.
+    let pairs: Vec<(Point, f64)> = (0..witnesses.len())
+        .filter_map(|k| {
+            let (d, _) = det_of[k]?;
+            (witness_of[d].map(|(w, _)| w) == Some(k)).then(|| {
+                let p = tracks[witnesses[k]].predicted_box();
                 (dets[d].det.bbox.center() - p.center(), size(&p))
             })
         })

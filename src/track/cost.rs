@@ -568,7 +568,7 @@ mod tests {
         let b = BBox::new(0.0, 0.0, 40.0, 80.0);
         let motion = Box::new(BoxKalman::new(&b, Config::default().motion_params()).unwrap());
         let det = Detection::from_box(b, 1.0);
-        let track = Track::born(&det, &Features::default(), motion, None, 1, false);
+        let track = Track::born(&det, &Features::default(), motion, None, 1, false, false);
         // One detection where the track is, one beside it (IoU 0), one overlapping by half.
         let dets =
             [0.0, 200.0, 20.0].map(|x| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), 1.0));

@@ -108,8 +108,10 @@ pub struct Track {
     reported_until: u32,
     /// Shapes matched while tentative, reported if the track is confirmed.
     pending: Vec<TrackedShape>,
-    /// The reported box's filters (see [`super::estimate`]).
-    estimate: BoxEstimate,
+    /// The reported box's filters (see [`super::estimate`]): only for a track born from a
+    /// box detection under [`ReportBox::Adaptive`], the one case that reads them (they would
+    /// run every frame for nothing otherwise).
+    estimate: Option<BoxEstimate>,
 }
 
 impl std::fmt::Debug for Track {
@@ -192,7 +194,10 @@ impl Track {
         let b = match config.report_box {
             ReportBox::Detection => return shape,
             ReportBox::Filter => self.anchor,
-            ReportBox::Adaptive => self.estimate.current(fit, &self.last.bbox),
+            ReportBox::Adaptive => match &self.estimate {
+                Some(e) => e.current(fit, &self.last.bbox),
+                None => return shape,
+            },
         };
         if b.is_valid() {
             shape.bbox = b;
@@ -239,7 +244,8 @@ impl Track {
 impl Track {
     /// A tentative track born from detection `det` (with its `features`) in tracker frame
     /// `frame`. `appearance` is its first appearance, if described; `snapshot` keeps a copy of
-    /// the filter for [`Config::reupdate_after_gap`].
+    /// the filter for [`Config::reupdate_after_gap`]; `smooth` runs the reported box's filters
+    /// ([`ReportBox::Adaptive`]; a mask detection reports its mask's box regardless).
     pub(crate) fn born(
         det: &Detection,
         features: &Features,
@@ -247,6 +253,7 @@ impl Track {
         appearance: Option<Arc<Appearance>>,
         frame: u32,
         snapshot: bool,
+        smooth: bool,
     ) -> Track {
         let b = det.bbox;
         let mut sizes = Sizes::default();
@@ -274,7 +281,7 @@ impl Track {
             last: det.clone(),
             features: Some(features.clone()),
             pending: Vec::new(),
-            estimate: BoxEstimate::new(&b),
+            estimate: (smooth && det.mask.is_none()).then(|| BoxEstimate::new(&b)),
         }
     }
 
@@ -286,7 +293,9 @@ impl Track {
         }
         self.motion.predict();
         self.predicted = self.motion.project();
-        self.estimate.predict();
+        if let Some(e) = &mut self.estimate {
+            e.predict();
+        }
     }
 
     /// The whole image moved by `(dx, dy)` since the last frame (camera motion, see
@@ -303,7 +312,9 @@ impl Track {
         if self.last.mask.is_none() {
             self.last.bbox = mv(&self.last.bbox);
         }
-        self.estimate.translate(dx, dy);
+        if let Some(e) = &mut self.estimate {
+            e.translate(dx, dy);
+        }
     }
 
     /// A match in tracker frame `frame` with detection `det` (and its `features`): the motion
@@ -375,8 +386,8 @@ impl Track {
         if let Some(a) = &features.appearance {
             self.set_appearance(a.clone(), whole);
         }
-        if det.mask.is_none() {
-            self.estimate.update(&det.bbox, fit);
+        if let (Some(e), None) = (&mut self.estimate, &det.mask) {
+            e.update(&det.bbox, fit);
         }
         self.hits += 1;
         self.misses = 0;
@@ -445,7 +456,9 @@ impl Track {
     /// misses; a confirmed one is lost, and removed after `max_lost`.
     pub(crate) fn miss(&mut self, max_tentative_misses: u32, max_lost: u32) {
         self.misses += 1;
-        self.estimate.missed();
+        if let Some(e) = &mut self.estimate {
+            e.missed();
+        }
         match self.state {
             TrackState::Tentative if self.misses > max_tentative_misses => {
                 self.state = TrackState::Removed;

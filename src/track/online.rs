@@ -57,7 +57,7 @@ use super::appearance::cost_models;
 use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
 use super::camera::Camera;
 use super::coasting::GapStats;
-use super::config::Config;
+use super::config::{Config, ReportBox};
 use super::cost::{CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::estimate::NoiseFit;
@@ -789,6 +789,7 @@ impl Tracker {
                 appearance,
                 self.frame,
                 snapshot,
+                self.config.report_box == ReportBox::Adaptive,
             );
             let evidence = match self.config.birth_evidence {
                 Some(low) => t.add_evidence(if weak { low } else { 1.0 }),
