@@ -1495,6 +1495,10 @@ pub struct FillOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub hidden_ratio: Option<f64>,
+    /// Keep the online pass's coasted shapes after an identity's last observation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub coasted_tails: Option<bool>,
     /// Longest gap filled in seconds (instead of `max_gap` frames).
     #[serde(
         deserialize_with = "double_option",
@@ -1974,8 +1978,18 @@ impl Tracker {
                 k.shape.id = root;
             }
         }
-        // The result's interpolated shapes include those the online pass coasted over (they
-        // are in the history already): only the gaps the offline pass filled are new.
+        // A join may be made over a slave's coasted tail (the pass ignores coasted shapes):
+        // where that tail now meets the master's observed shape, the observation stays.
+        let observed: std::collections::HashSet<(u64, u32)> = self
+            .history
+            .iter()
+            .filter(|k| !k.shape.interpolated)
+            .map(|k| (k.shape.id, k.shape.frame))
+            .collect();
+        self.history
+            .retain(|k| !(k.shape.interpolated && observed.contains(&(k.shape.id, k.shape.frame))));
+        // The history keeps the online pass's coasted shapes (tracker output the page already
+        // shows): only the gaps the offline pass filled where nothing was shown are new.
         let present: std::collections::HashSet<(u64, u32)> = self
             .history
             .iter()

@@ -60,7 +60,7 @@ fn offline_box_mode_writes_every_format_and_keeps_the_interpolated_flag() {
         o
     };
 
-    // MOT text: more shapes than the online pass (gaps filled), fewer ids (joins).
+    // MOT text: the online pass's shapes plus fills less dropped coasting, fewer ids (joins).
     let online = dir.join("online.txt");
     let o = shapetrack(&["track", "--det", s(&det), "--out", s(&online)]);
     assert!(o.status.success());
@@ -76,8 +76,10 @@ fn offline_box_mode_writes_every_format_and_keeps_the_interpolated_flag() {
     let filled = summary_value(&o, "filled");
     let n_joins = summary_value(&o, "joins");
     assert!(filled > 0, "{text}");
+    let dropped = summary_value(&o, "coasted_dropped");
     let res = parse_mot(&read_text(&mot).unwrap(), "offline").unwrap();
-    assert_eq!(res.len(), online.len() + filled);
+    // Coasted shapes the fill replaced, or past a track's last observation, are left out.
+    assert_eq!(res.len() + dropped, online.len() + filled);
     let ids = |r: &[shapetrack::io::Record]| r.iter().map(|r| r.id).collect::<BTreeSet<_>>();
     assert_eq!(ids(&res).len() + n_joins, ids(&online).len());
     let j: serde_json::Value = serde_json::from_str(&read_text(&joins).unwrap()).unwrap();
@@ -117,11 +119,12 @@ fn offline_box_mode_writes_every_format_and_keeps_the_interpolated_flag() {
         res.len()
     );
 
-    // An offline config changes the behaviour: no fill, no joins = the online output.
+    // An offline config changes the behaviour: no fill, no joins, coasted tails kept = the
+    // online output.
     let cfg = dir.join("offline_config.json");
     std::fs::write(
         &cfg,
-        r#"{"relink": {"max_gap_seconds": 0}, "fill": {"max_gap": 0}}"#,
+        r#"{"relink": {"max_gap_seconds": 0}, "fill": {"max_gap": 0, "coasted_tails": true}}"#,
     )
     .unwrap();
     let plain = dir.join("plain.txt");

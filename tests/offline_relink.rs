@@ -407,15 +407,29 @@ proptest! {
         ..ProptestConfig::default()
     })]
 
-    /// Whatever the input and solver: no (frame, id) twice, every observed shape comes back
-    /// exactly once with its box untouched, filled shapes sit only in gaps of their own id and
-    /// are marked, and no joined identity has two observed shapes in one frame.
+    /// Whatever the input and solver, with or without coasted tails from the online pass: no
+    /// (frame, id) twice, every observed shape comes back exactly once with its box
+    /// untouched, filled and kept coasted shapes sit only in gaps of their own id and are
+    /// marked, the counts add up, and no joined identity has two observed shapes in one frame.
     #[test]
     fn relinker_never_duplicates_and_never_moves_observed_boxes(
         shapes in tracks_strategy(),
         greedy in any::<bool>(),
         wide in any::<bool>(),
+        coast in 0..4u32,
     ) {
+        // Each track coasts `coast` frames past its last observation, as the online pass does.
+        let mut last: BTreeMap<u64, (u32, Point)> = BTreeMap::new();
+        for s in &shapes {
+            let e = last.entry(s.id).or_insert((s.frame, s.centroid));
+            if s.frame >= e.0 {
+                *e = (s.frame, s.centroid);
+            }
+        }
+        let mut shapes = shapes;
+        for (&id, &(f, c)) in &last {
+            shapes.extend((1..=coast).map(|k| coasted(id, f + k, c)));
+        }
         let mut config = OfflineConfig::default();
         config.fill.max_gap = 20;
         if greedy {
@@ -433,7 +447,11 @@ proptest! {
         for s in &out.shapes {
             prop_assert!(seen.insert((s.frame, s.id)), "({}, {}) twice", s.frame, s.id);
         }
-        let mut input: HashMap<_, TrackedShape> = shapes.iter().map(|s| (key(s), s.clone())).collect();
+        let mut input: HashMap<_, TrackedShape> = shapes
+            .iter()
+            .filter(|s| !s.interpolated)
+            .map(|s| (key(s), s.clone()))
+            .collect();
         let map = out.id_map();
         for s in out.shapes.iter().filter(|s| !s.interpolated) {
             let orig = input.remove(&key(s));
@@ -449,10 +467,80 @@ proptest! {
             let after = out.shapes.iter().any(|o| o.id == s.id && o.frame > s.frame && !o.interpolated);
             prop_assert!(before && after, "filled shape outside its track's span");
         }
-        prop_assert_eq!(out.filled, out.shapes.iter().filter(|s| s.interpolated).count());
+        prop_assert_eq!(out.shapes.len() + out.coasted_dropped, shapes.len() + out.filled);
         for j in &out.joins {
             prop_assert!(j.slave_last < j.master_first);
             prop_assert!((0.0..=1.0).contains(&j.cost));
         }
     }
+}
+
+/// `shape` as the online pass coasts it: its prediction during a miss, marked interpolated.
+fn coasted(id: u64, frame: u32, c: Point) -> TrackedShape {
+    TrackedShape {
+        state: TrackState::Lost,
+        det_index: None,
+        interpolated: true,
+        ..shape(id, frame, c)
+    }
+}
+
+/// The online pass coasted a track through a 5-frame miss on a prediction 30 px off. The
+/// offline pass knows both ends: the fill on the straight line between them replaces the
+/// coasted shapes, one shape per frame.
+#[test]
+fn coasted_shapes_inside_a_track_are_replaced_by_the_fill() {
+    let pos = |f: f64| Point::new(50.0 + 4.0 * f, 200.0);
+    let mut shapes = track(1, 1..=20, pos);
+    shapes.extend((21..=25).map(|f| coasted(1, f, pos(f64::from(f)) + Point::new(0.0, 30.0))));
+    shapes.extend(track(1, 26..=40, pos));
+    let out = run(shapes, &OfflineConfig::default(), 25.0);
+    assert_eq!(out.shapes.len(), 40);
+    assert_eq!((out.filled, out.coasted_dropped), (5, 5));
+    for f in 21..=25u32 {
+        let s: Vec<&TrackedShape> = out.shapes.iter().filter(|s| s.frame == f).collect();
+        assert_eq!(s.len(), 1, "frame {f}");
+        let want = pos(f64::from(f));
+        assert!(s[0].interpolated);
+        assert!(
+            close(s[0].centroid.x, want.x) && close(s[0].centroid.y, want.y),
+            "frame {f}: {:?}, want {want:?}",
+            s[0].centroid
+        );
+    }
+}
+
+/// A track lost in frame 41 coasts to frame 48, and the object comes back under a new id in
+/// frame 45. The coasted tail overlapping the new track's first frames is no observation, so
+/// the two are still joined (an overlap of observed shapes forbids it), and the joined
+/// identity has one shape per frame.
+#[test]
+fn a_coasted_tail_does_not_block_a_join() {
+    let pos = |f: f64| Point::new(50.0 + 4.0 * f, 200.0);
+    let mut shapes = track(3, 1..=40, pos);
+    shapes.extend((41..=48).map(|f| coasted(3, f, pos(f64::from(f)))));
+    shapes.extend(track(8, 45..=90, pos));
+    let out = run(shapes, &OfflineConfig::default(), 25.0);
+    assert_eq!(out.joins.len(), 1, "{:?}", out.joins);
+    assert!(out.shapes.iter().all(|s| s.id == 3));
+    let frames: HashSet<u32> = out.shapes.iter().map(|s| s.frame).collect();
+    assert_eq!(frames.len(), out.shapes.len(), "two shapes in one frame");
+    assert_eq!(frames, (1..=90).collect::<HashSet<u32>>());
+}
+
+/// A track coasted past its last observation and never seen again: offline, the coasted tail
+/// is dropped by default and kept with `fill.coasted_tails`.
+#[test]
+fn coasted_tails_are_dropped_unless_asked_for() {
+    let pos = |f: f64| Point::new(50.0 + 4.0 * f, 200.0);
+    let mut shapes = track(1, 1..=30, pos);
+    shapes.extend((31..=36).map(|f| coasted(1, f, pos(f64::from(f)))));
+    let out = run(shapes.clone(), &OfflineConfig::default(), 25.0);
+    assert_eq!(out.shapes.iter().map(|s| s.frame).max(), Some(30));
+    assert_eq!((out.filled, out.coasted_dropped), (0, 6));
+    let mut config = OfflineConfig::default();
+    config.fill.coasted_tails = true;
+    let kept = run(shapes, &config, 25.0);
+    assert_eq!(kept.shapes.iter().map(|s| s.frame).max(), Some(36));
+    assert_eq!((kept.filled, kept.coasted_dropped), (0, 0));
 }

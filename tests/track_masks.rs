@@ -417,3 +417,57 @@ fn deforming_shapes_keep_one_id_each() {
         "{reported} of {alone_frames} reported"
     );
 }
+
+/// A mask square whose outline jitters frame to frame (a ragged segmenter) while it moves
+/// steadily: under the adaptive reported box (the default) its box is smoothed once the
+/// smoothing has been seen to agree with what came next, and the mask stays the detection's;
+/// with `report_box: detection` the box is always the mask's.
+#[test]
+fn a_jittering_masks_box_is_smoothed_and_its_mask_kept() {
+    // A fixed pseudo-random jitter in [-4, 4] px per side.
+    let jitter = |k: u32| ((k.wrapping_mul(2_654_435_761) >> 7) % 9) as i32 - 4;
+    let det = |t: u32| {
+        let x = 40 + 2 * t as i32 + jitter(4 * t);
+        let y = 60 + jitter(4 * t + 1);
+        let w = (40 + jitter(4 * t + 2)) as u32;
+        let h = (40 + jitter(4 * t + 3)) as u32;
+        Detection::from_mask(
+            Mask::new(x, y, w, h, vec![1; (w * h) as usize]).unwrap(),
+            0.9,
+        )
+    };
+    let run = |config: Config| {
+        let mut t = Tracker::new(config).unwrap().with_image_size(640, 480);
+        let mut out = Vec::new();
+        for f in 0..120 {
+            out.extend(t.update(None, &[det(f)]).unwrap());
+        }
+        out
+    };
+    let adaptive = run(Config::masks());
+    let mut smoothed = 0;
+    for s in &adaptive {
+        let d = det(s.frame - 1);
+        assert_eq!(
+            s.mask, d.mask,
+            "frame {}: the mask is the detection's",
+            s.frame
+        );
+        if s.bbox != d.mask.as_ref().unwrap().bbox() {
+            smoothed += 1;
+        }
+    }
+    assert!(
+        smoothed > 40,
+        "only {smoothed} of {} boxes smoothed",
+        adaptive.len()
+    );
+    let raw = run(Config {
+        report_box: shapetrack::track::ReportBox::Detection,
+        ..Config::masks()
+    });
+    assert!(!raw.is_empty());
+    for s in &raw {
+        assert_eq!(s.bbox, s.mask.as_ref().unwrap().bbox(), "frame {}", s.frame);
+    }
+}

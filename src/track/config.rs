@@ -23,7 +23,8 @@ pub enum ShapeVariant {
     Sift,
 }
 
-/// The box a track reports for a matched box detection.
+/// The box a track reports for a matched detection (a mask detection's mask is reported
+/// unchanged beside it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ReportBox {
@@ -351,9 +352,11 @@ pub struct Config {
     /// The frame rate those frame counts are given at. Default 30 (ByteTrack's convention:
     /// `track_buffer` 30 frames at 30 fps).
     pub frame_counts_at: f64,
-    /// The box a track matched to a box detection reports (mask detections always report
-    /// their mask's box). Default [`ReportBox::Adaptive`]: the detection smoothed only as far
-    /// as smoothing agrees with the following detections on this sequence.
+    /// The box a track matched to a detection reports. Default [`ReportBox::Adaptive`]: the
+    /// detection's box smoothed only as far as smoothing agrees with the following detections
+    /// on this sequence — for mask detections too (the mask stays the detection's; a ragged,
+    /// split or merged mask's box is a noisy measurement like a detector's box). Under
+    /// `Detection` and `Filter` a mask detection reports its mask's box.
     pub report_box: ReportBox,
     /// Tracks unmatched in the last frame follow the camera: when the tracks that were matched
     /// agree on a common offset between their predictions and this frame's detections (a

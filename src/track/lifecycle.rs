@@ -108,9 +108,9 @@ pub struct Track {
     reported_until: u32,
     /// Shapes matched while tentative, reported if the track is confirmed.
     pending: Vec<TrackedShape>,
-    /// The reported box's filters (see [`super::estimate`]): only for a track born from a
-    /// box detection under [`ReportBox::Adaptive`], the one case that reads them (they would
-    /// run every frame for nothing otherwise).
+    /// The reported box's filters (see [`super::estimate`]): only under
+    /// [`ReportBox::Adaptive`], the one setting that reads them (they would run every frame
+    /// for nothing otherwise).
     estimate: Option<BoxEstimate>,
 }
 
@@ -180,28 +180,27 @@ impl Track {
     }
 
     /// `shape` (of a detection matched to this track) with the box the track reports (see
-    /// [`Config::report_box`] and [`super::estimate`]); mask detections report their mask's
-    /// box.
+    /// [`Config::report_box`] and [`super::estimate`]); a mask keeps its mask and centroid,
+    /// and reports its mask's box unless the box is adaptive.
     pub(crate) fn reported_shape(
         &self,
         config: &Config,
         fit: &NoiseFit,
         mut shape: TrackedShape,
     ) -> TrackedShape {
-        if shape.mask.is_some() {
-            return shape;
-        }
-        let b = match config.report_box {
-            ReportBox::Detection => return shape,
-            ReportBox::Filter => self.anchor,
-            ReportBox::Adaptive => match &self.estimate {
+        let b = match (config.report_box, shape.mask.is_some()) {
+            (ReportBox::Detection, _) | (ReportBox::Filter, true) => return shape,
+            (ReportBox::Filter, false) => self.anchor,
+            (ReportBox::Adaptive, _) => match &self.estimate {
                 Some(e) => e.current(fit, &self.last.bbox),
                 None => return shape,
             },
         };
         if b.is_valid() {
+            if shape.mask.is_none() {
+                shape.centroid = b.center();
+            }
             shape.bbox = b;
-            shape.centroid = b.center();
         }
         shape
     }
@@ -281,7 +280,7 @@ impl Track {
             last: det.clone(),
             features: Some(features.clone()),
             pending: Vec::new(),
-            estimate: (smooth && det.mask.is_none()).then(|| BoxEstimate::new(&b)),
+            estimate: smooth.then(|| BoxEstimate::new(&b)),
         }
     }
 
@@ -386,7 +385,7 @@ impl Track {
         if let Some(a) = &features.appearance {
             self.set_appearance(a.clone(), whole);
         }
-        if let (Some(e), None) = (&mut self.estimate, &det.mask) {
+        if let Some(e) = &mut self.estimate {
             e.update(&det.bbox, fit);
         }
         self.hits += 1;

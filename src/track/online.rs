@@ -64,7 +64,7 @@ use super::estimate::NoiseFit;
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
 use super::fragments::{merge_fragments, Merge};
 use super::lifecycle::{two_mut, BoxMotion, Track};
-use super::prepare::{kept, prepare, shape_of, validate, Prepared};
+use super::prepare::{check_frame_size, kept, prepare, shape_of, validate, Prepared};
 use super::regions::{estimate_regions, Regions};
 use super::scores::{ScoreStats, Thresholds};
 use super::timing::{Phase, PhaseTimes, Timer};
@@ -261,7 +261,7 @@ impl Tracker {
         frame: Option<&Frame<'_>>,
         detections: &[Detection],
     ) -> Result<Vec<TrackedShape>, TrackError> {
-        self.check_frame_size(frame)?;
+        check_frame_size(frame, self.frame_size)?;
         validate(detections)?;
         self.thresholds = self.next_thresholds(detections);
         let (min, high) = (self.config.min_score, self.thresholds.high);
@@ -347,24 +347,6 @@ impl Tracker {
         let r = f(self);
         self.timer.exit();
         r
-    }
-
-    /// A frame of another size than the earlier ones is an error.
-    fn check_frame_size(&self, frame: Option<&Frame<'_>>) -> Result<(), TrackError> {
-        let size = frame.map(|f| (f.width(), f.height()));
-        if let (Some((width, height)), Some((expected_width, expected_height))) =
-            (size, self.frame_size)
-        {
-            if (width, height) != (expected_width, expected_height) {
-                return Err(TrackError::FrameSize {
-                    width,
-                    height,
-                    expected_width,
-                    expected_height,
-                });
-            }
-        }
-        Ok(())
     }
 
     /// Every filter steps one frame.

@@ -84,6 +84,25 @@ pub(crate) fn validate(detections: &[Detection]) -> Result<(), TrackError> {
     Ok(())
 }
 
+/// A frame of another size than the earlier ones (`expected`) is an error.
+pub(crate) fn check_frame_size(
+    frame: Option<&Frame<'_>>,
+    expected: Option<(u32, u32)>,
+) -> Result<(), TrackError> {
+    let size = frame.map(|f| (f.width(), f.height()));
+    if let (Some((width, height)), Some((expected_width, expected_height))) = (size, expected) {
+        if (width, height) != (expected_width, expected_height) {
+            return Err(TrackError::FrameSize {
+                width,
+                height,
+                expected_width,
+                expected_height,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Whether a valid detection takes part at all: it scores at least `min_score` and has an
 /// area (zero-area boxes carry no overlap information: they are skipped, not errors).
 pub(crate) fn kept(det: &Detection, min_score: f64) -> bool {

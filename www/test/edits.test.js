@@ -211,6 +211,17 @@ test('the offline pass joins tracks and fills gaps as one undoable edit', () => 
   assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7, 8, 9], 3: [1, 2, 3, 4, 5, 6, 7, 8, 9] });
 });
 
+test('a join over a coasted tail keeps the observations', () => {
+  const m = new EditModel();
+  // Track 1 seen in 1–3, coasted (predicted, interpolated) in 4–6; track 2 seen from 5 on.
+  m.ingest([...tracked({ 1: [1, 2, 3], 2: [5, 6, 7] }), ...fill(1, [4, 5, 6])].sort((a, b) => a.frame - b.frame));
+  assert.deepEqual(m.relink({ joins: [{ slave: 1, master: 2, master_first: 5 }], filled: [] }), { joined: 1, filled: 0 });
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7] });
+  assert.deepEqual(m.table.track(1).map((r) => !!r.interpolated), [false, false, false, true, false, false, false]);
+  m.undo();
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6], 2: [5, 6, 7] });
+});
+
 test('the offline pass follows chains and fills every gap of one', () => {
   const m = new EditModel();
   m.ingest(tracked({ 1: [1, 2], 2: [5, 6], 3: [9, 10] }));

@@ -262,6 +262,17 @@ struct Row {
     det_a: f64,
     #[serde(rename = "AssA")]
     ass_a: f64,
+    /// Localisation, detection recall and precision: where a DetA difference comes from.
+    #[serde(rename = "LocA", default)]
+    loc_a: f64,
+    #[serde(rename = "DetRe", default)]
+    det_re: f64,
+    #[serde(rename = "DetPr", default)]
+    det_pr: f64,
+    #[serde(rename = "CLR_Re", default)]
+    clr_re: f64,
+    #[serde(rename = "CLR_Pr", default)]
+    clr_pr: f64,
     #[serde(rename = "IDF1")]
     idf1: f64,
     #[serde(rename = "MOTA")]
@@ -276,6 +287,11 @@ impl From<&Summary> for Row {
             hota: s.hota,
             det_a: s.det_a,
             ass_a: s.ass_a,
+            loc_a: s.loc_a,
+            det_re: s.det_re,
+            det_pr: s.det_pr,
+            clr_re: s.clr_re,
+            clr_pr: s.clr_pr,
             idf1: s.idf1,
             mota: s.mota,
             idsw: s.idsw,

@@ -745,7 +745,12 @@ pub fn run(args: Args) -> crate::CliResult {
             }
         })?;
         core += t0.elapsed();
-        summary = format!(" joins={} filled={}", res.joins.len(), res.filled);
+        summary = format!(
+            " joins={} filled={} coasted_dropped={}",
+            res.joins.len(),
+            res.filled,
+            res.coasted_dropped
+        );
         if let Some(p) = &args.joins {
             write_text(p, &serde_json::to_string_pretty(&res.joins)?)?;
         }

@@ -29,6 +29,12 @@
 //! with `interpolated = true` (COCO-video and CVAT exports carry the flag; MOT/MOTS text
 //! cannot).
 //!
+//! **Coasting**: the online pass's coasted shapes (its predictions while a track was missed,
+//! marked interpolated) are not observations. Joins and fills see observed shapes only; a
+//! coasted shape stays where no observed or filled shape of its final identity covers its
+//! frame, and is dropped past the identity's last observation unless
+//! [`FillConfig::coasted_tails`] ([`OfflineResult::coasted_dropped`] counts what went).
+//!
 //! **Where this departs from the thesis, and why** (measured on MOT15-train, box mode, with
 //! parameters chosen on six sequences and checked on the other five, and on synthetic
 //! occlusion scenes; `tests/data/quality/README.md` has the numbers):
@@ -150,8 +156,16 @@ pub struct OfflineResult {
     pub shapes: Vec<TrackedShape>,
     /// The joins made, by the master's first frame.
     pub joins: Vec<Join>,
-    /// Number of shapes filled in (`interpolated = true`).
+    /// Number of shapes the fill made (`interpolated = true`). The online pass's coasted
+    /// shapes that stay are interpolated too, and not counted here.
     pub filled: usize,
+    /// How many of the online pass's coasted shapes (its predictions during misses) were
+    /// left out: replaced by a fill or by an observation of the joined identity, past the
+    /// identity's last observation (see [`FillConfig::coasted_tails`]), or in an identity
+    /// too short to keep. With `min_track_seconds` 0 (the default), output shapes = input
+    /// shapes + `filled` − `coasted_dropped`.
+    #[serde(default)]
+    pub coasted_dropped: usize,
 }
 
 impl OfflineResult {
@@ -254,6 +268,14 @@ pub fn relink(
     }
     drop(seen);
 
+    // The online pass's coasted shapes (its predictions during misses, marked interpolated)
+    // carry no evidence: joins and fills work on observed shapes only, and a coasted shape
+    // stays only where no observed or filled shape of its final identity covers the frame
+    // (and, unless `fill.coasted_tails`, only before that identity's last observation).
+    // Otherwise a slave's coasted tail overlaps its master's first frames (no join possible)
+    // and a gap's predictions stand where the two observed ends give a better estimate.
+    let (shapes, coasted): (Vec<TrackedShape>, Vec<TrackedShape>) =
+        shapes.into_iter().partition(|s| !s.interpolated);
     let pieces = relink::pieces(&shapes);
     let use_appearance = config.appearance.enabled && snapshots.is_some_and(|s| !s.is_empty());
     let mut cache = match snapshots {
@@ -273,6 +295,7 @@ pub fn relink(
         shapes: Vec::new(),
         joins,
         filled: 0,
+        coasted_dropped: 0,
     };
     let map = result.id_map();
     let origin: Vec<u64> = shapes.iter().map(|s| s.id).collect();
@@ -290,8 +313,27 @@ pub fn relink(
         fps,
         progress,
     )?;
-    result.filled = filled.len();
+    let n_coasted = coasted.len();
     shapes.extend(filled);
+    let covered: std::collections::HashSet<(u64, u32)> =
+        shapes.iter().map(|s| (s.id, s.frame)).collect();
+    let mut last_seen: std::collections::HashMap<u64, u32> = Default::default();
+    for s in &shapes {
+        let e = last_seen.entry(s.id).or_insert(s.frame);
+        *e = (*e).max(s.frame);
+    }
+    let kept: Vec<TrackedShape> = coasted
+        .into_iter()
+        .filter_map(|mut s| {
+            s.id = map.get(&s.id).copied().unwrap_or(s.id);
+            let tail = last_seen.get(&s.id).is_none_or(|&f| s.frame > f);
+            (!covered.contains(&(s.id, s.frame)) && (config.fill.coasted_tails || !tail))
+                .then_some(s)
+        })
+        .collect();
+    let kept_at: std::collections::HashSet<(u64, u32)> =
+        kept.iter().map(|s| (s.id, s.frame)).collect();
+    shapes.extend(kept);
     if config.min_track_seconds > 0.0 {
         // Identities too short to be real: count their observed shapes.
         let need = (config.min_track_seconds * fps).ceil();
@@ -300,8 +342,13 @@ pub fn relink(
             *observed.entry(s.id).or_default() += 1.0;
         }
         shapes.retain(|s| observed.get(&s.id).copied().unwrap_or(0.0) >= need);
-        result.filled = shapes.iter().filter(|s| s.interpolated).count();
     }
+    let coasted_kept = shapes
+        .iter()
+        .filter(|s| s.interpolated && kept_at.contains(&(s.id, s.frame)))
+        .count();
+    result.filled = shapes.iter().filter(|s| s.interpolated).count() - coasted_kept;
+    result.coasted_dropped = n_coasted - coasted_kept;
     shapes.sort_by_key(|s| (s.frame, s.id));
     result.shapes = shapes;
     progress(Progress {

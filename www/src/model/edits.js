@@ -194,6 +194,10 @@ export class EditModel {
       if (to === null || to === from) continue;
       for (const r of table.track(from)) {
         drop(r);
+        const there = table.get(r.frame, to);
+        // The pass joins over a slave's coasted tail: an observation replaces a coasted
+        // prediction of the same frame, never the other way round.
+        if (there && there.interpolated && !r.interpolated) drop(there);
         if (!table.get(r.frame, to)) put(withId(r, to));
       }
       moved.set(from, to);
