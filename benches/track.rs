@@ -5,7 +5,10 @@
 //!   and 200 moving boxes per frame;
 //! - mask mode (`Config::masks`, frames given, appearance where needed): the browser demo's
 //!   scene (`SynthConfig::demo()`, 1280×720, 12 shapes) and the occlusion scene of
-//!   `tests/track_synth.rs` (640×480, 10 shapes). Frames are rendered before timing.
+//!   `tests/track_synth.rs` (640×480, 10 shapes). Frames are rendered before timing;
+//! - mask mode by shape count and resolution (`track_mask_scaling`: 10, 20, 50 and 200 shapes
+//!   at 640×480 and 1280×720, the scenes of `shapetrack bench`), for the scaling target of
+//!   issue 10 (200 shapes ≤ 12× the 20-shape cost).
 //!
 //! `cargo bench --bench track`. For the per-phase split and more sizes: `shapetrack bench`.
 
@@ -88,18 +91,30 @@ fn bench(c: &mut Criterion) {
 }
 
 fn track_masks(frames: &[SynthFrame]) -> usize {
-    let mut t = Tracker::new(Config::masks()).expect("config");
-    let mut n = 0;
-    for f in frames {
-        let frame = f.frame().expect("frame");
-        n += t.update(Some(&frame), &f.detections).expect("track").len();
-    }
-    n
+    // Run *on* a one-thread rayon pool, as the CLI does (src/bin/shapetrack/main.rs): linfa's
+    // k-means then runs its rayon calls inline instead of handing each one to a worker
+    // thread, the browser's situation (one thread per worker).
+    on_one_thread_pool(|| {
+        let mut t = Tracker::new(Config::masks()).expect("config");
+        let mut n = 0;
+        for f in frames {
+            let frame = f.frame().expect("frame");
+            n += t.update(Some(&frame), &f.detections).expect("track").len();
+        }
+        n
+    })
+}
+
+/// `f` run on the single thread of a fresh one-thread rayon pool.
+fn on_one_thread_pool<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("rayon pool")
+        .install(f)
 }
 
 fn bench_masks(c: &mut Criterion) {
-    // linfa's k-means would otherwise use a rayon pool; the browser has one thread.
-    std::env::set_var("RAYON_NUM_THREADS", "1");
     let mut g = c.benchmark_group("track_mask_mode");
     g.sample_size(10);
     let demo = SynthConfig {
@@ -121,5 +136,31 @@ fn bench_masks(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_masks);
+/// Masks with frames by shape count and resolution, on the scenes `shapetrack bench` times
+/// (`SynthConfig::default()` resized, seed 1): criterion's per-element throughput makes the
+/// scaling (200 vs 20 shapes) readable from the report. 40 frames per scene keeps one sample
+/// of the 200-shape scene in seconds.
+fn bench_mask_scaling(c: &mut Criterion) {
+    let mut g = c.benchmark_group("track_mask_scaling");
+    g.sample_size(10);
+    for (width, height) in [(640u32, 480u32), (1280, 720)] {
+        for shapes in [10u32, 20, 50, 200] {
+            let cfg = SynthConfig {
+                seed: 1,
+                frames: 40,
+                shapes,
+                width,
+                height,
+                ..SynthConfig::default()
+            };
+            let frames: Vec<SynthFrame> = Scene::new(cfg).expect("scene").collect();
+            g.throughput(Throughput::Elements(frames.len() as u64));
+            let id = BenchmarkId::new(format!("{width}x{height}"), format!("{shapes}_shapes"));
+            g.bench_with_input(id, &frames, |b, f| b.iter(|| black_box(track_masks(f))));
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_masks, bench_mask_scaling);
 criterion_main!(benches);
