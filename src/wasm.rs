@@ -1341,9 +1341,10 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub frame_counts_at: Option<f64>,
-    /// The box reported for a matched box detection: the detection's, the association
-    /// filter's, or (default) the detection smoothed only as far as smoothing agrees with the
-    /// following detections of this sequence.
+    /// The box reported for a matched detection: the detection's, the association filter's
+    /// (box detections only), or (default) the detection smoothed only as far as smoothing
+    /// agrees with the following detections of this sequence, mask detections included (the
+    /// app's mask detectors ask for `detection`: a label's box is its mask's extent).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional, type = "\"detection\" | \"filter\" | \"adaptive\"")]
     pub report_box: Option<String>,

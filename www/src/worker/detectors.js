@@ -94,8 +94,10 @@ function backgroundSubtractor(options) {
     // (`cargo run --release --example demo_presets`). A background model holds only while the
     // camera stands still, so there is no camera motion to follow: following the small common
     // residuals of its precise masks moved lost tracks off (occlusion scene, box-mode defaults:
-    // 25 → 27 ids online, IDF1 59.6 → 51.0).
-    tracker: { preset: 'masks', high_score: 0.25, new_track_score: 0.5, camera_motion: false },
+    // 25 → 27 ids online, IDF1 59.6 → 51.0). A label's box is its mask's extent
+    // (`report_box: 'detection'`): exports carry both (COCO's bbox beside its segmentation;
+    // MOTS only the mask), and a smoothed box beside the mask would disagree with it.
+    tracker: { preset: 'masks', high_score: 0.25, new_track_score: 0.5, camera_motion: false, report_box: 'detection' },
     init({ core }) {
       bg = new core.BackgroundDetector(/** @type {import('../../pkg/shapetrack.js').BackgroundOptions} */ (options));
     },
@@ -118,7 +120,8 @@ function backgroundSubtractor(options) {
 function sceneMasks() {
   return {
     name: 'scene',
-    tracker: { preset: 'masks' },
+    // As the background detector's: a label's box is its mask's extent.
+    tracker: { preset: 'masks', report_box: 'detection' },
     init() {},
     detect(frame) {
       if (!frame.scene) throw new Error('the "scene masks" detector needs the synthetic source');
