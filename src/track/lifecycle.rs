@@ -244,7 +244,7 @@ impl Track {
     /// A tentative track born from detection `det` (with its `features`) in tracker frame
     /// `frame`. `appearance` is its first appearance, if described; `snapshot` keeps a copy of
     /// the filter for [`Config::reupdate_after_gap`]; `smooth` runs the reported box's filters
-    /// ([`ReportBox::Adaptive`]; a mask detection reports its mask's box regardless).
+    /// (under [`ReportBox::Adaptive`], for box and mask detections alike).
     pub(crate) fn born(
         det: &Detection,
         features: &Features,

@@ -315,14 +315,14 @@ pub fn relink(
     )?;
     let n_coasted = coasted.len();
     shapes.extend(filled);
-    let covered: std::collections::HashSet<(u64, u32)> =
-        shapes.iter().map(|s| (s.id, s.frame)).collect();
     let mut last_seen: std::collections::HashMap<u64, u32> = Default::default();
     for s in &shapes {
         let e = last_seen.entry(s.id).or_insert(s.frame);
         *e = (*e).max(s.frame);
     }
-    let kept: Vec<TrackedShape> = coasted
+    let covered: std::collections::HashSet<(u64, u32)> =
+        shapes.iter().map(|s| (s.id, s.frame)).collect();
+    let mut kept: Vec<TrackedShape> = coasted
         .into_iter()
         .filter_map(|mut s| {
             s.id = map.get(&s.id).copied().unwrap_or(s.id);
@@ -331,9 +331,6 @@ pub fn relink(
                 .then_some(s)
         })
         .collect();
-    let kept_at: std::collections::HashSet<(u64, u32)> =
-        kept.iter().map(|s| (s.id, s.frame)).collect();
-    shapes.extend(kept);
     if config.min_track_seconds > 0.0 {
         // Identities too short to be real: count their observed shapes.
         let need = (config.min_track_seconds * fps).ceil();
@@ -341,14 +338,14 @@ pub fn relink(
         for s in shapes.iter().filter(|s| !s.interpolated) {
             *observed.entry(s.id).or_default() += 1.0;
         }
-        shapes.retain(|s| observed.get(&s.id).copied().unwrap_or(0.0) >= need);
+        let long = |s: &TrackedShape| observed.get(&s.id).copied().unwrap_or(0.0) >= need;
+        shapes.retain(long);
+        kept.retain(long);
     }
-    let coasted_kept = shapes
-        .iter()
-        .filter(|s| s.interpolated && kept_at.contains(&(s.id, s.frame)))
-        .count();
-    result.filled = shapes.iter().filter(|s| s.interpolated).count() - coasted_kept;
-    result.coasted_dropped = n_coasted - coasted_kept;
+    // `shapes` holds observed and filled shapes only until the kept coasting joins them.
+    result.filled = shapes.iter().filter(|s| s.interpolated).count();
+    result.coasted_dropped = n_coasted - kept.len();
+    shapes.extend(kept);
     shapes.sort_by_key(|s| (s.frame, s.id));
     result.shapes = shapes;
     progress(Progress {
