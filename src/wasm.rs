@@ -1278,6 +1278,11 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub lost_reid_only: Option<bool>,
+    /// With `lost_reid_only`, lost tracks missed for at most this many frames (at 30 fps)
+    /// still take part in the main association.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub lost_main_frames: Option<u32>,
     /// A track being confirmed first looks for a lost track it re-identifies and takes its id.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]

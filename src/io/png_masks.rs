@@ -179,7 +179,8 @@ pub struct PngMaskSequence {
     pub records: Vec<Record>,
 }
 
-/// The `*.png` files of a folder in name order.
+/// The `*.png` files of a folder in name order, numbers by value (`2.png` before `10.png`,
+/// as with frame folders: see [`super::natural_cmp`]).
 pub fn png_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
     let io = |source| IoError::Io {
         file: dir.display().to_string(),
@@ -192,7 +193,7 @@ pub fn png_files(dir: &Path) -> Result<Vec<PathBuf>, IoError> {
             files.push(p);
         }
     }
-    files.sort();
+    files.sort_by(|a, b| super::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     Ok(files)
 }
 
@@ -341,5 +342,21 @@ mod tests {
             );
         }
         assert!(!rles.contains_key(&0));
+    }
+
+    #[test]
+    fn png_files_are_in_frame_order() {
+        let dir = std::env::temp_dir().join(format!("shapetrack-png-order-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for n in ["1.png", "10.png", "12.png", "2.png", "notes.txt"] {
+            std::fs::write(dir.join(n), b"").unwrap();
+        }
+        let names: Vec<String> = png_files(&dir)
+            .unwrap()
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(names, ["1.png", "2.png", "10.png", "12.png"]);
     }
 }

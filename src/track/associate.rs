@@ -44,6 +44,9 @@ impl Used {
 pub enum StageTracks {
     /// Confirmed tracks (matched in the previous frame).
     Confirmed,
+    /// Confirmed tracks, and lost ones last seen whole and missed for at most this many
+    /// frames (see [`Config::lost_main_frames`]).
+    Recent(u32),
     /// Lost tracks (unmatched for a frame or more, still searchable).
     Lost,
     /// Confirmed and lost tracks together, in one assignment.
@@ -55,9 +58,23 @@ pub enum StageTracks {
 }
 
 impl StageTracks {
+    /// Whether this stage offers `track` (by its state, and for [`StageTracks::Recent`] its
+    /// misses).
+    pub(crate) fn accepts_track(self, track: &Track) -> bool {
+        match self {
+            StageTracks::Recent(n) => {
+                let state = track.state();
+                state == TrackState::Confirmed
+                    || (state == TrackState::Lost && track.misses() <= n && track.last_seen_whole())
+            }
+            _ => self.accepts(track.state()),
+        }
+    }
+
     fn accepts(self, state: TrackState) -> bool {
         match self {
             StageTracks::Confirmed => state == TrackState::Confirmed,
+            StageTracks::Recent(_) => state == TrackState::Confirmed,
             StageTracks::Lost => state == TrackState::Lost,
             StageTracks::Active => matches!(state, TrackState::Confirmed | TrackState::Lost),
             StageTracks::Tentative => state == TrackState::Tentative,
@@ -100,6 +117,23 @@ pub struct Stage {
     pub max_cost: f64,
 }
 
+/// The tracks the main association offers under [`Config::lost_reid_only`]: the confirmed
+/// ones, and the lost ones within [`Config::lost_main_frames`].
+fn main_tracks(config: &Config) -> StageTracks {
+    match config.lost_main_frames {
+        0 => StageTracks::Confirmed,
+        n => StageTracks::Recent(config.frames(n)),
+    }
+}
+
+/// Whether `track` takes part in the main association under `config`: all but the lost
+/// tracks that re-identification alone looks for (see [`Config::lost_reid_only`]).
+pub(crate) fn in_main(config: &Config, track: &Track) -> bool {
+    !config.lost_reid_only
+        || track.state() != TrackState::Lost
+        || main_tracks(config).accepts_track(track)
+}
+
 /// The stages `config` describes, in the order they run:
 ///
 /// 1. tracks seen in the previous frame × high detections (with lost tracks in the same
@@ -124,7 +158,7 @@ pub fn stages(config: &Config) -> Vec<Stage> {
     if config.lost_reid_only {
         out.push(main(
             "confirmed",
-            StageTracks::Confirmed,
+            main_tracks(config),
             High,
             config.max_cost,
         ));
@@ -171,7 +205,7 @@ pub fn stages(config: &Config) -> Vec<Stage> {
 impl Stage {
     /// Whether track `t` and detection `d`, both still free, are offered by this stage.
     pub(crate) fn offers(&self, t: &Track, d: &Prepared<'_>) -> bool {
-        self.tracks.accepts(t.state())
+        self.tracks.accepts_track(t)
             && match self.detections {
                 StageDetections::High => d.high,
                 StageDetections::Low => !d.high,
@@ -278,6 +312,14 @@ mod tests {
         let m = Config::masks();
         assert_eq!(names(&m), ["confirmed", "low", "reid", "tentative"]);
         let s = stages(&m);
+        // Lost mask tracks join the main association while their gap is short.
+        assert_eq!(s[0].tracks, StageTracks::Recent(m.lost_main_frames));
+        assert!(m.lost_main_frames > 0);
+        let none = Config {
+            lost_main_frames: 0,
+            ..Config::masks()
+        };
+        assert_eq!(stages(&none)[0].tracks, StageTracks::Confirmed);
         assert_eq!(s[1].max_cost, m.max_cost_low);
         assert_eq!(s[2].costs, StageCosts::Reid);
         assert_eq!(s[2].max_cost, m.reid_max_cost);

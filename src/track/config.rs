@@ -280,6 +280,14 @@ pub struct Config {
     /// recognised by its appearance, not by a detection happening to lie where it was
     /// predicted. Default false (MOT15 boxes have no appearance); the mask preset turns it on.
     pub lost_reid_only: bool,
+    /// With [`Config::lost_reid_only`], lost tracks last seen whole and missed for at most
+    /// this many frames (at [`Config::frame_counts_at`] fps) still take part in the main
+    /// association: a shape seen whole cannot have slid behind something in one frame, so the
+    /// gap is a missed detection (a ragged mask in a crowd) and the prediction is still where
+    /// the shape is; shapes last seen partly (going behind an occluder) and longer gaps are
+    /// for re-identification by appearance. Default 0; the mask preset uses its coasting span
+    /// (8): a track reported at its prediction is also matched there.
+    pub lost_main_frames: u32,
     /// The pair-cost terms of the main association. Default: IoU with the predicted box, mask
     /// IoU (masks only), and shape context + colour at 0.5/0.5 (when registered, with data).
     pub terms: Terms,
@@ -404,6 +412,7 @@ impl Default for Config {
             lost_second: false,
             tentative_first: false,
             lost_reid_only: false,
+            lost_main_frames: 0,
             terms: Terms::default(),
             reid_terms: Terms::reid_default(),
             reid_at_confirmation: false,
@@ -451,7 +460,9 @@ impl Config {
     /// - A detection is taken as partly hidden only below 0.4 of the track's reference area
     ///   (`appearance.whole_ratio`): shapes that deform change area by up to ±50 % while in
     ///   full view, and 0.85 read that as occlusion (and split them into several identities).
-    /// - Lost tracks are matched only by re-identification (`lost_reid_only`): the detection
+    /// - Lost tracks are matched only by re-identification (`lost_reid_only`), except in
+    ///   the 8 frames after a whole view (`lost_main_frames`, the coasting span; mask cells:
+    ///   mean HOTA 71.92 → 72.30, ragged crowds +3.0, ragged occluders −2.2): the detection
     ///   must lie inside the lost track's predicted box (grown by a quarter of its size on
     ///   each side, more with every missed frame: IoA gate 0.5), and its colours must be the
     ///   track's (reference view, gate 0.5); SIFT matches count too. At confirmation a new
@@ -479,6 +490,7 @@ impl Config {
             reid_at_confirmation: true,
             merge_fragments: true,
             lost_reid_only: true,
+            lost_main_frames: 8,
             // Chosen without it; on the mask cells it gains on ragged masks and loses
             // BDD100K's real masks to ByteTrack (59.8 vs 60.4), so the preset keeps it off.
             reupdate_after_gap: false,

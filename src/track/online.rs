@@ -54,7 +54,7 @@ use std::borrow::Cow;
 use std::sync::Arc;
 
 use super::appearance::cost_models;
-use super::associate::{score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
+use super::associate::{in_main, score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
 use super::camera::Camera;
 use super::coasting::GapStats;
 use super::config::{Config, ReportBox};
@@ -410,11 +410,7 @@ impl Tracker {
         }
         let want = if self.config.appearance.lazy {
             let reid_only = self.config.lost_reid_only;
-            let counted = |t: usize| {
-                self.tracks
-                    .get(t)
-                    .is_some_and(|t| !(reid_only && t.state() == TrackState::Lost))
-            };
+            let counted = |t: usize| self.tracks.get(t).is_some_and(|t| in_main(&self.config, t));
             // Detections carry no appearance yet, so the appearance terms have no data here.
             let geometric = score_edges(&self.costs, &self.tracks, regions, dets, |&(t, _)| {
                 counted(t)
@@ -660,10 +656,7 @@ impl Tracker {
         if self.needs.is_empty() || matches.is_empty() {
             return;
         }
-        let reid_only = self.config.lost_reid_only;
-        let crowded = crowded_next_frame(&self.tracks, |t| {
-            !(reid_only && t.state() == TrackState::Lost)
-        });
+        let crowded = crowded_next_frame(&self.tracks, |t| in_main(&self.config, t));
         let refresh = self.config.appearance.refresh;
         for m in matches {
             let Some(d) = dets.get(m.det) else {
