@@ -61,20 +61,13 @@ impl StageTracks {
     /// Whether this stage offers `track` (by its state, and for [`StageTracks::Recent`] its
     /// misses).
     pub(crate) fn accepts_track(self, track: &Track) -> bool {
+        let state = track.state();
         match self {
+            StageTracks::Confirmed => state == TrackState::Confirmed,
             StageTracks::Recent(n) => {
-                let state = track.state();
                 state == TrackState::Confirmed
                     || (state == TrackState::Lost && track.misses() <= n && track.last_seen_whole())
             }
-            _ => self.accepts(track.state()),
-        }
-    }
-
-    fn accepts(self, state: TrackState) -> bool {
-        match self {
-            StageTracks::Confirmed => state == TrackState::Confirmed,
-            StageTracks::Recent(_) => state == TrackState::Confirmed,
             StageTracks::Lost => state == TrackState::Lost,
             StageTracks::Active => matches!(state, TrackState::Confirmed | TrackState::Lost),
             StageTracks::Tentative => state == TrackState::Tentative,

@@ -178,10 +178,21 @@ impl BoxEstimate {
         self.recent = [None, None];
     }
 
+    /// Candidate `j`'s estimate of coordinate `k`, given the raw detection's coordinates and
+    /// the association filter's (`None`, or not finite: the raw detection stands in).
+    fn candidate(&self, k: usize, j: usize, raw: &[f64; 4], filter: Option<&[f64; 4]>) -> f64 {
+        match j {
+            RAW => raw[k],
+            FILTER => filter.map_or(raw[k], |a| if a[k].is_finite() { a[k] } else { raw[k] }),
+            _ => self.bank[k][j].x[0],
+        }
+    }
+
     /// Corrects every filter with the detection box `z` (`filter`: the association filter's
-    /// box after its own correction); once the track is past its warm-up, the estimates made
-    /// two matches ago are scored against this one and the last (`fit`).
-    pub(crate) fn update(&mut self, z: &BBox, filter: &BBox, fit: &mut NoiseFit) {
+    /// box after its own correction, when it is a candidate); once the track is past its
+    /// warm-up, the estimates made two matches ago are scored against this one and the last
+    /// (`fit`).
+    pub(crate) fn update(&mut self, z: &BBox, filter: Option<&BBox>, fit: &mut NoiseFit) {
         let (c, s) = (coords(z), scales(z.w, z.h));
         if !c.iter().all(|v| v.is_finite()) {
             return;
@@ -193,15 +204,9 @@ impl BoxEstimate {
                 f.update(c[k], s[k] * s[k]);
             }
         }
-        let a = coords(filter);
-        let now: [[f64; CANDIDATES]; 4] = std::array::from_fn(|k| {
-            std::array::from_fn(|j| match j {
-                RAW => c[k],
-                FILTER if a[k].is_finite() => a[k],
-                FILTER => c[k],
-                _ => self.bank[k][j].x[0],
-            })
-        });
+        let a = filter.map(coords);
+        let now: [[f64; CANDIDATES]; 4] =
+            std::array::from_fn(|k| std::array::from_fn(|j| self.candidate(k, j, &c, a.as_ref())));
         if let ([Some((_, then)), Some((z1, _))], true) = (&self.recent, self.updates > WARMUP) {
             for k in 0..4 {
                 // The next two detections extrapolated back to the estimate's frame.
@@ -213,22 +218,17 @@ impl BoxEstimate {
     }
 
     /// The reported box: per coordinate, the candidate `fit` prefers, from the estimates of
-    /// the last update (`last` is the raw detection, `filter` the association filter's box);
-    /// the raw detection while the track is in its warm-up (the filters started from rest and
-    /// still lag).
-    pub(crate) fn current(&self, fit: &NoiseFit, last: &BBox, filter: &BBox) -> BBox {
+    /// the last update (`last` is the raw detection, `filter` the association filter's box
+    /// when it is a candidate); the raw detection while the track is in its warm-up (the
+    /// filters started from rest and still lag).
+    pub(crate) fn current(&self, fit: &NoiseFit, last: &BBox, filter: Option<&BBox>) -> BBox {
         let best = fit.best();
         // The detection itself, exactly (not rebuilt from its centre and size).
         if self.updates <= WARMUP || best == [RAW; 4] {
             return *last;
         }
-        let (raw, a) = (coords(last), coords(filter));
-        let v: [f64; 4] = std::array::from_fn(|k| match best[k] {
-            RAW => raw[k],
-            FILTER if a[k].is_finite() => a[k],
-            FILTER => raw[k],
-            j => self.bank[k][j].x[0],
-        });
+        let (raw, a) = (coords(last), filter.map(coords));
+        let v: [f64; 4] = std::array::from_fn(|k| self.candidate(k, best[k], &raw, a.as_ref()));
         let (w, h) = (v[2].max(0.0), v[3].max(0.0));
         let b = BBox::new(v[0] - w / 2.0, v[1] - h / 2.0, w, h);
         // A detection that jumped away from every smoother (a pose change, an occluder's
@@ -310,9 +310,9 @@ mod tests {
                     50.0 * (1.0 + jitter * err[2]),
                     100.0 * (1.0 + jitter * err[3]),
                 );
-                e.update(&z, &z, &mut fit);
+                e.update(&z, None, &mut fit);
                 if t > 40 {
-                    err_report += (e.current(&fit, &z, &z).center().x - x).abs();
+                    err_report += (e.current(&fit, &z, None).center().x - x).abs();
                     err_raw += (z.center().x - x).abs();
                     n += 1.0;
                 }
@@ -356,9 +356,9 @@ mod tests {
                 50.0,
                 100.0,
             );
-            e.update(&z, &truth, &mut fit);
+            e.update(&z, Some(&truth), &mut fit);
             if t > 100 {
-                err_report += (e.current(&fit, &z, &truth).center().x - x).abs();
+                err_report += (e.current(&fit, &z, Some(&truth)).center().x - x).abs();
                 err_raw += (z.center().x - x).abs();
             }
         }
@@ -372,6 +372,6 @@ mod tests {
         assert_eq!(fit.best(), [RAW; 4]);
         let b = BBox::new(10.0, 20.0, 30.0, 40.0);
         let e = BoxEstimate::new(&BBox::new(0.0, 0.0, 30.0, 40.0));
-        assert_eq!(e.current(&fit, &b, &b), b);
+        assert_eq!(e.current(&fit, &b, None), b);
     }
 }

@@ -192,7 +192,7 @@ impl Track {
             (ReportBox::Detection, _) | (ReportBox::Filter, true) => return shape,
             (ReportBox::Filter, false) => self.anchor,
             (ReportBox::Adaptive, _) => match &self.estimate {
-                Some(e) => e.current(fit, &self.last.bbox, &self.smoother_box(&self.last)),
+                Some(e) => e.current(fit, &self.last.bbox, self.smoother_box(&self.last).as_ref()),
                 None => return shape,
             },
         };
@@ -208,13 +208,9 @@ impl Track {
     /// The association filter's box as a candidate of the reported box's bank (see
     /// [`super::estimate`]), for box detections only: a mask track's filter follows the whole
     /// shape's (amodal) box, not the detection's, and on crowds of ragged masks reporting it
-    /// cost 8 HOTA (robustness grid); the detection's own box stands in for it there, which
-    /// the bank never prefers to the raw candidate. `det` is the detection it is matched to.
-    fn smoother_box(&self, det: &Detection) -> BBox {
-        match det.mask {
-            Some(_) => det.bbox,
-            None => self.anchor,
-        }
+    /// cost 8 HOTA (robustness grid). `det` is the detection the track is matched to.
+    fn smoother_box(&self, det: &Detection) -> Option<BBox> {
+        det.mask.is_none().then_some(self.anchor)
     }
 
     /// The filter's box right after the last match.
@@ -399,7 +395,7 @@ impl Track {
         }
         let filter = self.smoother_box(det);
         if let Some(e) = &mut self.estimate {
-            e.update(&det.bbox, &filter, fit);
+            e.update(&det.bbox, filter.as_ref(), fit);
         }
         self.hits += 1;
         self.misses = 0;
