@@ -66,7 +66,13 @@ function mergeExpected(records, keep, drop) {
     .map((r) => (r.id === drop ? { ...r, id: keep } : r));
 }
 
-test('import, select with the mouse, merge with the keyboard, undo/redo, export MOT', async () => {
+/** The CSS background colour of an element, once its text is `text` (drawn after the edit). */
+async function background(/** @type {import('playwright-core').Page} */ page, /** @type {string} */ selector, /** @type {string} */ text) {
+  await page.waitForFunction(([sel, t]) => document.querySelector(sel)?.textContent === t, [selector, text]);
+  return page.$eval(selector, (el) => getComputedStyle(el).backgroundColor);
+}
+
+test('import, select with the mouse, merge with the keyboard, undo/redo, renumber, export MOT', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);
   await page.goto(`${server.url}?demo=0`);
@@ -131,9 +137,10 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   assert.ok(!ids.includes(pick.b.id), 'redo merges again');
   assert.match(await status(), /^redid: .*merge/, 'the status line follows redo');
 
-  // Renumber (N, type, Enter): the track keeps its selection under the new id, the status
-  // line says so; undone, the old number comes back (and the state before is restored for
-  // the export below).
+  // Renumber (N, type, Enter): the track keeps its selection and its colour under the new
+  // id, the status line says so; undone, the old number comes back (and the state before is
+  // restored for the export below).
+  const colourBefore = await background(page, '#sel-a', String(pick.a.id));
   await page.keyboard.press('n');
   await page.fill('#renumber-input', '777');
   await page.press('#renumber-input', 'Enter');
@@ -141,6 +148,8 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   assert.ok(renumbered.ids.includes(777) && !renumbered.ids.includes(pick.a.id));
   assert.deepEqual(renumbered.selection, { a: 777, b: null }, 'selection follows the new id');
   assert.match(await status(), new RegExp(`renumber ${pick.a.id} as 777`));
+  assert.equal(await background(page, '#sel-a', '777'), colourBefore, 'the renumbered track keeps its colour');
+  assert.equal(await background(page, '#track-list li.sel .sw', ''), colourBefore, 'in the track list too');
   await page.keyboard.press('Control+z');
   ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
   assert.ok(ids.includes(pick.a.id) && !ids.includes(777));

@@ -8,6 +8,7 @@ import { Stage } from './view/stage.js';
 import { Timeline } from './view/timeline.js';
 import { Panel } from './view/panel.js';
 import { FpsMeter } from './lib/fps.js';
+import { colorOf } from './lib/colors.js';
 import { byId } from './lib/dom.js';
 import { startWorker } from './worker/protocol.js';
 import { listDetectors } from './worker/detectors.js';
@@ -93,15 +94,21 @@ export class App {
     /** Serialises frame grabs: one <video> can seek to one place at a time. */
     this.grabChain = Promise.resolve();
 
-    this.stage = new Stage(byId('frame', HTMLCanvasElement), byId('overlay', HTMLCanvasElement), (rle) =>
-      core.decodeMask(rle),
+    // A track keeps its colour when renumbered: the edit model knows which colour it wears.
+    /** @param {number} id */
+    const colour = (id) => colorOf(this.model.colourKey(id));
+    this.stage = new Stage(
+      byId('frame', HTMLCanvasElement),
+      byId('overlay', HTMLCanvasElement),
+      (rle) => core.decodeMask(rle),
+      colour,
     );
     this.stage.onResize = () => this.render();
     this.attached = this.worker.attach(byId('frame', HTMLCanvasElement));
     this.timeline = new Timeline(byId('timeline', HTMLCanvasElement), ({ id, frame, add }) => {
       if (id !== null) this.select(id, add);
       void this.seek(frame);
-    });
+    }, colour);
     this.panel = new Panel({
       onSelect: (id, add) => this.select(id, add),
       onAction: (a) => this.action(a),
@@ -111,7 +118,7 @@ export class App {
           this.model.reassign(this.need(this.selection.a), to);
           this.selection = { a: to, b: null };
         }),
-    });
+    }, colour);
     this.model.subscribe(() => {
       this.validateSelection();
       this.scoreSoon();

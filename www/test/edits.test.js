@@ -101,6 +101,32 @@ test('reassign renumbers, or merges when the number is taken', () => {
   assert.deepEqual(layout(m.table), { 1: [1, 2], 2: [4] });
 });
 
+test('a renumbered track keeps its colour, through undo, redo and renumbering again', () => {
+  const m = model({ 1: [1, 2], 2: [4], 3: [5] });
+  m.reassign(1, 10);
+  assert.equal(m.colourKey(10), 1, 'track 10 wears the colour it had as 1');
+  m.reassign(10, 20);
+  assert.equal(m.colourKey(20), 1);
+  assert.equal(m.colourKey(10), 10, 'the number it left has no colour of its own left over');
+  // Another track given the freed number wears its own colour, not the renumbered one's.
+  m.reassign(3, 1);
+  assert.equal(m.colourKey(1), 3);
+  m.undo();
+  assert.equal(m.colourKey(1), 1);
+  assert.equal(m.colourKey(20), 1);
+  m.undo();
+  assert.equal(m.colourKey(10), 1);
+  m.redo();
+  assert.equal(m.colourKey(20), 1);
+  // Merged into another track, it takes that track's colour: it is that object now.
+  m.reassign(2, 20);
+  assert.equal(m.colourKey(20), 1);
+  m.reassign(20, 2);
+  assert.equal(m.colourKey(2), 1);
+  m.replaceAll([rec(1, 2)]);
+  assert.equal(m.colourKey(2), 2, 'an import starts with every id its own colour');
+});
+
 test('delete a track and a single record, both undoable', () => {
   const m = model({ 1: [1, 2], 2: [1, 2] });
   m.deleteTrack(2);

@@ -25,6 +25,8 @@ import { TrackTable } from './tracks.js';
  *   aliasesAfter: Map<number, number | null>,
  *   nextIdBefore: number,
  *   nextIdAfter: number,
+ *   coloursBefore: Map<number, number>,
+ *   coloursAfter: Map<number, number>,
  * }} Patch
  */
 
@@ -60,6 +62,12 @@ export class EditModel {
     this.labellerIds = new Set();
     /** Above every id seen so far: what the next labeller-made track gets. */
     this.nextId = table.maxId() + 1;
+    /**
+     * Shown id → the id whose colour it wears, for tracks that were renumbered (absent: its
+     * own). A track's colour is how a labeller follows it; a new number must not change it.
+     * @type {Map<number, number>}
+     */
+    this.colours = new Map();
     /** @type {Patch[]} */
     this.undoStack = [];
     /** @type {Patch[]} */
@@ -91,6 +99,15 @@ export class EditModel {
   resolve(trackerId) {
     const a = this.aliases.get(trackerId);
     return a === undefined ? trackerId : a;
+  }
+
+  /**
+   * The id whose colour track `id` is drawn in (its own unless it was renumbered).
+   * @param {number} id
+   * @returns {number}
+   */
+  colourKey(id) {
+    return this.colours.get(id) ?? id;
   }
 
   /**
@@ -138,6 +155,7 @@ export class EditModel {
     this.labellerIds = new Set();
     this.table = new TrackTable(records);
     this.nextId = this.table.maxId() + 1;
+    this.colours = new Map();
     this.undoStack = [];
     this.redoStack = [];
     this.emit();
@@ -258,8 +276,9 @@ export class EditModel {
    * @param {Map<number, number | null>} renames shown id → new shown id (null: deleted), for
    *   frames still to come from the tracker
    * @param {number} [nextIdAfter]
+   * @param {Map<number, number>} [coloursAfter] the colour map after the edit (default: as is)
    */
-  commit(label, removed, added, renames, nextIdAfter = this.nextId) {
+  commit(label, removed, added, renames, nextIdAfter = this.nextId, coloursAfter = this.colours) {
     const aliasesAfter = new Map();
     for (const [t, shown] of this.aliases) {
       aliasesAfter.set(t, shown !== null && renames.has(shown) ? /** @type {number | null} */ (renames.get(shown)) : shown);
@@ -278,6 +297,8 @@ export class EditModel {
       aliasesAfter,
       nextIdBefore: this.nextId,
       nextIdAfter,
+      coloursBefore: this.colours,
+      coloursAfter,
     };
     this.applyPatch(patch);
     this.undoStack.push(patch);
@@ -292,6 +313,7 @@ export class EditModel {
     for (const r of p.added) this.table.add(r);
     this.aliases = new Map(p.aliasesAfter);
     this.nextId = p.nextIdAfter;
+    this.colours = p.coloursAfter;
   }
 
   /** @param {Patch} p */
@@ -300,6 +322,7 @@ export class EditModel {
     for (const r of p.removed) this.table.add(r);
     this.aliases = new Map(p.aliasesBefore);
     this.nextId = p.nextIdBefore;
+    this.colours = p.coloursBefore;
   }
 
   /** @returns {string | null} the label of the undone edit */
@@ -372,7 +395,13 @@ export class EditModel {
     }
     const removed = this.table.track(id);
     const added = removed.map((r) => withId(r, to));
-    this.commit(`renumber ${id} as ${to}`, removed, added, new Map([[id, to]]), Math.max(this.nextId, to + 1));
+    // Patches hold their colour maps: a fresh map per edit, never changed afterwards.
+    const colours = new Map(this.colours);
+    const key = this.colourKey(id);
+    colours.delete(id);
+    if (key === to) colours.delete(to);
+    else colours.set(to, key);
+    this.commit(`renumber ${id} as ${to}`, removed, added, new Map([[id, to]]), Math.max(this.nextId, to + 1), colours);
   }
 
   /**
