@@ -243,6 +243,43 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
   await page.close();
 });
 
+test('a timeline click past the tracked frames shows the last tracked frame, and the counter says so', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  // The demo scene, a few frames tracked, then back to frame 1.
+  await page.click('#src-demo');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  await page.evaluate(async () => {
+    const app = /** @type {any} */ (window).__shapetrack.app;
+    for (let i = 0; i < 4; i++) await app.stepForward();
+    await app.seek(1);
+  });
+  const st0 = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st0.frame, 1);
+  assert.ok(st0.frames > st0.processed + 10, `the scene is longer than what was tracked: ${st0.processed}/${st0.frames}`);
+  // Click the timeline near its right end: a frame of the scene not tracked yet.
+  const geo = await page.evaluate(() => {
+    const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
+    const r = c.getBoundingClientRect();
+    return { right: r.right, top: r.top, height: r.height };
+  });
+  await page.mouse.click(geo.right - 3, geo.top + geo.height / 2);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame !== 1);
+  const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.frame, st0.processed, 'the seek stops at the last tracked frame');
+  assert.equal(st.processed, st0.processed, 'a seek tracks nothing');
+  await page.waitForFunction((f) => document.getElementById('frame-no')?.textContent?.startsWith(`${f}/`), st.frame);
+  // End and Shift+→ stop there too.
+  await page.keyboard.press('Home');
+  await page.keyboard.press('Shift+ArrowRight');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame !== 1);
+  assert.equal((await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state())).frame, st0.processed);
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('bad files are refused with a message, not a crash', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);

@@ -200,9 +200,18 @@ export class App {
 
   // ---------------------------------------------------------------- playback
 
-  /** Frames the scrubber can reach. */
+  /** Frames the scrubber and the timeline span (the whole source when its length is known). */
   get lastFrame() {
     return this.frames || Math.max(this.processed, this.model.table.lastFrame());
+  }
+
+  /**
+   * The last frame a seek may show: while tracking, the last frame tracked. A frame past it
+   * has no tracks yet, so showing its raw pixels under the frame counter would pass an
+   * untracked frame off as tracked; play (or →) tracks on from there.
+   */
+  get lastShown() {
+    return this.tracking ? this.processed : this.lastFrame;
   }
 
   async togglePlay() {
@@ -318,12 +327,11 @@ export class App {
     const inflight = [];
     let n = this.processed + 1;
     let lastDraw = 0;
-    const catchUp = this.cur > this.processed + 1;
     while (true) {
       while (this.playing && inflight.length < 2 && n <= until) {
         // Offline, paint a frame now and then so the labeller sees progress.
         const now = performance.now();
-        const paint = display === 'every' ? !catchUp || n >= this.cur : display === 'throttled' && now - lastDraw > OFFLINE_DRAW_MS;
+        const paint = display === 'every' || (display === 'throttled' && now - lastDraw > OFFLINE_DRAW_MS);
         if (paint) lastDraw = now;
         inflight.push(this.send(src, n++, paint));
       }
@@ -403,9 +411,12 @@ export class App {
     }
   }
 
-  /** @param {number} n */
+  /**
+   * Shows frame `n`, clamped to the frames that can be shown (`lastShown`).
+   * @param {number} n
+   */
   async seek(n) {
-    const target = Math.max(1, Math.min(this.lastFrame || 1, Math.round(n)));
+    const target = Math.max(1, Math.min(this.lastShown || 1, Math.round(n)));
     await this.show(target);
   }
 
@@ -886,11 +897,11 @@ export class App {
       case 'back10':
         return this.seek(this.cur - 10);
       case 'fwd10':
-        return this.seek(Math.min(this.cur + 10, this.tracking ? this.processed : this.lastFrame));
+        return this.seek(this.cur + 10);
       case 'first':
         return this.seek(1);
       case 'last':
-        return this.seek(this.tracking ? this.processed : this.lastFrame);
+        return this.seek(this.lastShown);
       case 'merge':
       case 'swap':
       case 'split':
