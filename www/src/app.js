@@ -544,7 +544,7 @@ export class App {
         this.edit(() => {
           if (y === null) throw new EditError('shift-click a second track to merge into the first');
           const { dropped } = this.model.merge(this.need(x), y);
-          if (dropped) return `merged; ${dropped} duplicate frame(s) kept from ${x}`;
+          if (dropped) return `merge ${y} into ${x}: ${dropped} filled-in shape(s) gave way to seen ones`;
         });
         break;
       case 'swap':

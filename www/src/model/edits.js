@@ -46,6 +46,24 @@ export class EditError extends Error {
  */
 const withId = (r, id) => ({ ...r, id });
 
+/**
+ * Ascending frame numbers as short text for a message: `3–7, 9, 12–40 (13 frames)`; past four
+ * runs, the first three and "…".
+ * @param {number[]} frames ascending
+ */
+export function frameRanges(frames) {
+  /** @type {string[]} */
+  const parts = [];
+  for (let i = 0; i < frames.length; ) {
+    let k = i;
+    while (k + 1 < frames.length && frames[k + 1] === frames[k] + 1) k++;
+    parts.push(k > i ? `${frames[i]}–${frames[k]}` : String(frames[i]));
+    i = k + 1;
+  }
+  const shown = parts.length > 4 ? [...parts.slice(0, 3), '…'] : parts;
+  return `${shown.join(', ')}${frames.length > 1 ? ` (${frames.length} frames)` : ''}`;
+}
+
 export class EditModel {
   /** @param {TrackTable} [table] */
   constructor(table = new TrackTable()) {
@@ -135,8 +153,8 @@ export class EditModel {
         if (!this.aliases.has(r.id) && this.taken(r.id)) this.aliases.set(r.id, this.nextId++);
       }
       const id = this.resolve(r.id);
-      // Two tracker tracks the labeller declared one object can both appear in a frame:
-      // keep the first, as a merge does.
+      // Two tracker tracks the labeller declared one object (a merge of fragments) can both
+      // appear in a later frame: the labeller's word holds and the first is kept there.
       if (id === null || this.table.get(frame, id)) continue;
       this.table.add(id === r.id ? r : withId(r, id));
       if (id >= this.nextId) this.nextId = id + 1;
@@ -359,29 +377,50 @@ export class EditModel {
   }
 
   /**
-   * Merges track `drop` into track `keep`: one object, two fragments. Where both have a record
-   * in the same frame the kept track's record stays and the other is dropped (a duplicate).
+   * Merges track `drop` into track `keep`: one object, two fragments. One object is in one
+   * place per frame, so two tracks both seen in the same frame are two objects: the merge is
+   * refused (an `EditError` naming the frames) rather than one side's shapes silently lost.
+   * Where only one side was seen and the other's shape was filled in (coasted over a missed
+   * detection, or interpolated by the offline pass), the seen one is kept; where both were
+   * filled in, the kept track's.
    * @param {number} keep
    * @param {number} drop
-   * @returns {{ dropped: number }} how many duplicate records were dropped
+   * @returns {{ dropped: number }} how many filled-in shapes gave way to the other track's
    */
   merge(keep, drop) {
     if (keep === drop) throw new EditError('cannot merge a track with itself');
     this.requireTrack(keep);
     this.requireTrack(drop);
-    const removed = this.table.track(drop);
+    const moved = this.table.track(drop);
+    /** @type {TrackRecord[]} the kept track's filled-in shapes that give way */
+    const replaced = [];
     const added = [];
+    /** @type {number[]} */
+    const both = [];
     let dropped = 0;
-    for (const r of removed) {
-      if (this.table.get(r.frame, keep)) dropped++;
-      else added.push(withId(r, keep));
+    for (const r of moved) {
+      const there = this.table.get(r.frame, keep);
+      if (!there) added.push(withId(r, keep));
+      else if (!there.interpolated && !r.interpolated) both.push(r.frame);
+      else if (there.interpolated && !r.interpolated) {
+        replaced.push(there);
+        added.push(withId(r, keep));
+        dropped++;
+      } else dropped++;
     }
-    this.commit(`merge ${drop} into ${keep}`, removed, added, new Map([[drop, keep]]));
+    if (both.length) {
+      throw new EditError(
+        `tracks ${keep} and ${drop} are both seen in frame${both.length === 1 ? '' : 's'} ${frameRanges(both)}: ` +
+          'two objects, not one — to fix an identity switch use Swap (W), or split or delete the overlap first',
+      );
+    }
+    this.commit(`merge ${drop} into ${keep}`, [...moved, ...replaced], added, new Map([[drop, keep]]));
     return { dropped };
   }
 
   /**
-   * Gives track `id` the number `to`. When `to` is already a track this is a merge.
+   * Gives track `id` the number `to`, keeping its colour. When `to` is already a track this is
+   * a merge.
    * @param {number} id
    * @param {number} to
    */
