@@ -316,6 +316,36 @@ test('a timeline click past the tracked frames shows the last tracked frame, and
   await page.close();
 });
 
+test('an import opens on the first frame that has tracks', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  // A real file whose tracks start late: the TUD ground truth moved 40 frames on.
+  const gt = tudGt();
+  const late = gt.text
+    .trim()
+    .split('\n')
+    .map((l) => {
+      const [f, ...rest] = l.split(',');
+      return [Number(f) + 40, ...rest].join(',');
+    });
+  const first = Math.min(...late.map((l) => Number(l.split(',')[0])));
+  await page.setInputFiles('#file-import', { name: 'late.txt', mimeType: 'text/plain', buffer: Buffer.from(late.join('\n') + '\n') });
+  await page.waitForFunction(() => {
+    const s = /** @type {any} */ (window).__shapetrack.state();
+    return s.ids.length > 0 && s.frame > 0;
+  });
+  assert.equal((await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state())).frame, first, 'the first frame with tracks');
+  const shown = await page.evaluate(() => {
+    const st = /** @type {any} */ (window).__shapetrack;
+    return st.app.model.table.at(st.app.cur).length;
+  });
+  assert.ok(shown > 0, 'the frame shown has tracks');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('bad files are refused with a message, not a crash', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);

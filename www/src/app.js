@@ -631,9 +631,12 @@ export class App {
       this.stage.resize(Math.max(1, Math.ceil(w)), Math.max(1, Math.ceil(h)));
       byId('empty').hidden = true;
     }
-    this.frames = Math.max(this.frames, parsed.frames ?? 0, this.model.table.lastFrame());
-    this.status(`${name}: ${records.length} records, ${this.model.table.ids().length} tracks`);
-    await this.seek(this.cur || 1);
+    const table = this.model.table;
+    this.frames = Math.max(this.frames, parsed.frames ?? 0, table.lastFrame());
+    this.status(`${name}: ${records.length} records, ${table.ids().length} tracks`);
+    // Stay on the frame shown if the import has tracks there; else open on the first frame that
+    // has any (without a source, an empty frame is a blank canvas: it looks like a failed import).
+    await this.seek(this.cur && table.at(this.cur).length ? this.cur : table.firstFrame() || 1);
   }
 
   /** @param {string} name @param {string} text */

@@ -34,6 +34,11 @@ test('table indexes by frame and id, and runs compress gaps', () => {
   assert.deepEqual(t.span(2), [1, 4]);
   assert.equal(t.size, 4);
   assert.equal(t.lastFrame(), 4);
+  assert.equal(t.firstFrame(), 1);
+  t.remove(/** @type {any} */ (t.get(1, 2)));
+  assert.equal(t.firstFrame(), 2);
+  assert.equal(new TrackTable().firstFrame(), 0);
+  t.add(rec(1, 2));
   assert.equal(t.maxId(), 5);
   assert.deepEqual(t.all().map((r) => [r.frame, r.id]), [[1, 2], [2, 2], [2, 5], [4, 2]]);
   // Replacing at the same place returns the old record; removing a stale object is a no-op.
