@@ -202,7 +202,7 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, renumbe
   await page.close();
 });
 
-test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard', async () => {
+test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard; the legend', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);
   await page.goto(`${server.url}?demo=0`);
@@ -273,6 +273,25 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
   const still = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   assert.equal(still.frame, under.frame, 'no seek behind the dialog');
   assert.deepEqual(still.ids, under.ids, 'no undo behind the dialog');
+  await page.keyboard.press('Escape');
+  await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
+  // The legend (in the help dialog, also behind the "legend" link under the view options)
+  // names every mark the views draw beside a plain box: starred ids, dashed boxes, hatched
+  // timeline spans, the ground-truth overlay.
+  await page.click('#legend-open');
+  assert.ok(await page.locator('#legend').isVisible());
+  assert.equal(await page.getByRole('list', { name: 'Legend' }).count(), 1, 'the legend is a list named "Legend"');
+  for (const [key, words] of /** @type {const} */ ([
+    ['star', /starred id/i],
+    ['star', /dashed box/i],
+    ['hatched', /hatched span/i],
+    ['ground-truth', /ground truth/i],
+  ])) {
+    const item = page.locator(`#legend li[data-legend="${key}"]`);
+    assert.ok(await item.isVisible(), `${key} is shown`);
+    assert.match((await item.textContent()) ?? '', words);
+  }
+  await page.locator('#help-dialog').screenshot({ path: join(OUT, 'legend.png') });
   await page.keyboard.press('Escape');
   await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
   assert.deepEqual(errors, []);
