@@ -58,15 +58,54 @@ function motLines(records) {
     .join('\n') + '\n';
 }
 
-/** Merge `drop` into `keep` by the rule the app promises: the kept track wins shared frames. */
-function mergeExpected(records, keep, drop) {
-  const keepFrames = new Set(records.filter((r) => r.id === keep).map((r) => r.frame));
-  return records
-    .filter((r) => !(r.id === drop && keepFrames.has(r.frame)))
-    .map((r) => (r.id === drop ? { ...r, id: keep } : r));
+/**
+ * Clicks the centre of a record's box on the overlay canvas (shift-click: the second track).
+ * @param {import('playwright-core').Page} page
+ * @param {any} r
+ * @param {boolean} shift
+ */
+async function clickOn(page, r, shift) {
+  const box = await page.locator('#overlay').boundingBox();
+  // Image size from the page state (the overlay canvas has the screen's resolution).
+  const [w, h] = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().size);
+  assert.ok(box);
+  const x = box.x + ((r.bbox.x + r.bbox.w / 2) / w) * box.width;
+  const y = box.y + ((r.bbox.y + r.bbox.h / 2) / h) * box.height;
+  if (shift) await page.keyboard.down('Shift');
+  await page.mouse.click(x, y);
+  if (shift) await page.keyboard.up('Shift');
 }
 
-test('import, select with the mouse, merge with the keyboard, undo/redo, export MOT', async () => {
+/**
+ * Tracks the page can click on: for every frame, the records whose box centre picks them
+ * (no smaller box in front). Frame → records.
+ * @param {import('playwright-core').Page} page
+ * @returns {Promise<Record<number, any[]>>}
+ */
+function clickable(page) {
+  return page.evaluate(() => {
+    const st = /** @type {any} */ (window).__shapetrack;
+    const table = st.app.model.table;
+    /** @type {Record<number, any[]>} */
+    const out = {};
+    for (let f = 1; f <= table.lastFrame(); f++) {
+      out[f] = table.at(f).filter((/** @type {any} */ r) => {
+        const cx = r.bbox.x + r.bbox.w / 2;
+        const cy = r.bbox.y + r.bbox.h / 2;
+        return st.app.stage.hit(table, f, { x: cx, y: cy }) === r.id;
+      });
+    }
+    return out;
+  });
+}
+
+/** The CSS background colour of an element, once its text is `text` (drawn after the edit). */
+async function background(/** @type {import('playwright-core').Page} */ page, /** @type {string} */ selector, /** @type {string} */ text) {
+  await page.waitForFunction(([sel, t]) => document.querySelector(sel)?.textContent === t, [selector, text]);
+  return page.$eval(selector, (el) => getComputedStyle(el).backgroundColor);
+}
+
+test('import, select with the mouse, merge with the keyboard, undo/redo, renumber, export MOT', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);
   await page.goto(`${server.url}?demo=0`);
@@ -76,73 +115,78 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
   const before = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
   assert.equal(before.length, gt.text.trim().split('\n').length, 'every line became a record');
+  const status = () => page.textContent('#status').then((t) => t ?? '');
+  const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
 
-  // Two tracks visible in one frame whose box centres are not inside a third, smaller box.
-  const pick = await page.evaluate(() => {
-    const st = /** @type {any} */ (window).__shapetrack;
-    const table = st.app.model.table;
-    for (let f = 1; f <= table.lastFrame(); f++) {
-      const recs = table.at(f);
-      const ok = recs.filter((/** @type {any} */ r) => {
-        const cx = r.bbox.x + r.bbox.w / 2;
-        const cy = r.bbox.y + r.bbox.h / 2;
-        return st.app.stage.hit(table, f, { x: cx, y: cy }) === r.id;
-      });
-      if (ok.length >= 2) return { frame: f, a: ok[0], b: ok[1] };
-    }
-    return null;
-  });
-  assert.ok(pick, 'a frame with two clickable tracks');
-  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), pick.frame);
-
-  /** Clicks the centre of a record's box on the overlay canvas. */
-  const clickOn = async (/** @type {any} */ r, /** @type {boolean} */ shift) => {
-    const box = await page.locator('#overlay').boundingBox();
-    // Image size from the page state (the overlay canvas has the screen's resolution).
-    const [w, h] = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().size);
-    const size = { w, h };
-    assert.ok(box);
-    const x = box.x + ((r.bbox.x + r.bbox.w / 2) / size.w) * box.width;
-    const y = box.y + ((r.bbox.y + r.bbox.h / 2) / size.h) * box.height;
-    if (shift) await page.keyboard.down('Shift');
-    await page.mouse.click(x, y);
-    if (shift) await page.keyboard.up('Shift');
-  };
-  await clickOn(pick.a, false);
-  await clickOn(pick.b, true);
-  const sel = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().selection);
-  assert.deepEqual(sel, { a: pick.a.id, b: pick.b.id });
+  // Two tracks seen in the same frame are two objects: merging them is refused with a message
+  // naming the frames, and no record is lost.
+  const hits = await clickable(page);
+  const both = Object.entries(hits).find(([, rs]) => rs.length >= 2);
+  assert.ok(both, 'a frame with two clickable tracks');
+  const [x, y] = both[1];
+  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), Number(both[0]));
+  await clickOn(page, x, false);
+  await clickOn(page, y, true);
+  assert.deepEqual((await state()).selection, { a: x.id, b: y.id });
   await page.keyboard.press('m');
-  const merged = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.match(await status(), new RegExp(`tracks ${x.id} and ${y.id} are both seen in frames? [0-9]`));
+  assert.ok(await page.locator('#status.error').count(), 'the refusal is shown as an error');
+  assert.deepEqual(await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records()), before, 'nothing changed');
+  assert.equal((await state()).canUndo, false);
+
+  // Two fragments that never share a frame: select one, go to where the other is, shift-click
+  // it, merge.
+  const firstSeen = (/** @type {number} */ id) => Math.min(...before.filter((/** @type {any} */ r) => r.id === id).map((/** @type {any} */ r) => r.frame));
+  const lastSeen = (/** @type {number} */ id) => Math.max(...before.filter((/** @type {any} */ r) => r.id === id).map((/** @type {any} */ r) => r.frame));
+  /** @type {{ a: any, b: any } | null} */
+  let pick = null;
+  const at = Object.entries(hits).flatMap(([, rs]) => rs);
+  for (const a of at) {
+    const b = at.find((r) => r.id !== a.id && lastSeen(a.id) < firstSeen(r.id));
+    if (b) {
+      pick = { a, b };
+      break;
+    }
+  }
+  assert.ok(pick, 'two clickable tracks that never share a frame');
+  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), pick.a.frame);
+  await clickOn(page, pick.a, false);
+  await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), pick.b.frame);
+  await clickOn(page, pick.b, true);
+  assert.deepEqual((await state()).selection, { a: pick.a.id, b: pick.b.id });
+  await page.keyboard.press('m');
+  const merged = await state();
   assert.ok(!merged.ids.includes(pick.b.id), 'the second track is gone');
   assert.ok(merged.canUndo);
 
   // The status line says what the last edit did, never an earlier message.
-  const status = () => page.textContent('#status').then((t) => t ?? '');
-  assert.match(await status(), /merge/);
+  assert.match(await status(), new RegExp(`merge ${pick.b.id} into ${pick.a.id}`));
 
   // Undo and redo through the keyboard.
   await page.keyboard.press('Control+z');
-  let ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
+  let ids = (await state()).ids;
   assert.ok(ids.includes(pick.b.id), 'undo brings the track back');
   assert.match(await status(), /^undid: .*merge/, 'the status line follows undo');
   await page.keyboard.press('Control+Shift+z');
-  ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
+  ids = (await state()).ids;
   assert.ok(!ids.includes(pick.b.id), 'redo merges again');
   assert.match(await status(), /^redid: .*merge/, 'the status line follows redo');
 
-  // Renumber (N, type, Enter): the track keeps its selection under the new id, the status
-  // line says so; undone, the old number comes back (and the state before is restored for
-  // the export below).
+  // Renumber (N, type, Enter): the track keeps its selection and its colour under the new
+  // id, the status line says so; undone, the old number comes back (and the state before is
+  // restored for the export below).
+  const colourBefore = await background(page, '#sel-a', String(pick.a.id));
   await page.keyboard.press('n');
   await page.fill('#renumber-input', '777');
   await page.press('#renumber-input', 'Enter');
-  const renumbered = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  const renumbered = await state();
   assert.ok(renumbered.ids.includes(777) && !renumbered.ids.includes(pick.a.id));
   assert.deepEqual(renumbered.selection, { a: 777, b: null }, 'selection follows the new id');
   assert.match(await status(), new RegExp(`renumber ${pick.a.id} as 777`));
+  assert.equal(await background(page, '#sel-a', '777'), colourBefore, 'the renumbered track keeps its colour');
+  assert.equal(await background(page, '#track-list li.sel .sw', ''), colourBefore, 'in the track list too');
   await page.keyboard.press('Control+z');
-  ids = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state().ids);
+  ids = (await state()).ids;
   assert.ok(ids.includes(pick.a.id) && !ids.includes(777));
   assert.match(await status(), /^undid: renumber/);
 
@@ -151,13 +195,14 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, export 
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
   const path = await download.path();
   const exported = readFileSync(path, 'utf8');
-  assert.equal(exported, motLines(mergeExpected(before, pick.a.id, pick.b.id)));
+  const expected = before.map((/** @type {any} */ r) => (r.id === pick.b.id ? { ...r, id: pick.a.id } : r));
+  assert.equal(exported, motLines(expected));
   await page.screenshot({ path: join(OUT, 'labelling.png') });
   assert.deepEqual(errors, []);
   await page.close();
 });
 
-test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard', async () => {
+test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard; the legend', async () => {
   const page = await browser.context.newPage();
   const errors = watchErrors(page);
   await page.goto(`${server.url}?demo=0`);
@@ -230,6 +275,92 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
   assert.deepEqual(still.ids, under.ids, 'no undo behind the dialog');
   await page.keyboard.press('Escape');
   await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
+  // The legend (in the help dialog, also behind the "legend" link under the view options)
+  // names every mark the views draw beside a plain box: starred ids, dashed boxes, hatched
+  // timeline spans, the ground-truth overlay.
+  await page.click('#legend-open');
+  assert.ok(await page.locator('#legend').isVisible());
+  assert.equal(await page.getByRole('list', { name: 'Legend' }).count(), 1, 'the legend is a list named "Legend"');
+  for (const [key, words] of /** @type {const} */ ([
+    ['star', /starred id/i],
+    ['star', /dashed box/i],
+    ['hatched', /hatched span/i],
+    ['ground-truth', /ground truth/i],
+  ])) {
+    const item = page.locator(`#legend li[data-legend="${key}"]`);
+    assert.ok(await item.isVisible(), `${key} is shown`);
+    assert.match((await item.textContent()) ?? '', words);
+  }
+  await page.locator('#help-dialog').screenshot({ path: join(OUT, 'legend.png') });
+  await page.keyboard.press('Escape');
+  await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('a timeline click past the tracked frames shows the last tracked frame, and the counter says so', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  // The demo scene, a few frames tracked, then back to frame 1.
+  await page.click('#src-demo');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  await page.evaluate(async () => {
+    const app = /** @type {any} */ (window).__shapetrack.app;
+    for (let i = 0; i < 4; i++) await app.stepForward();
+    await app.seek(1);
+  });
+  const st0 = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st0.frame, 1);
+  assert.ok(st0.frames > st0.processed + 10, `the scene is longer than what was tracked: ${st0.processed}/${st0.frames}`);
+  // Click the timeline near its right end: a frame of the scene not tracked yet.
+  const geo = await page.evaluate(() => {
+    const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
+    const r = c.getBoundingClientRect();
+    return { right: r.right, top: r.top, height: r.height };
+  });
+  await page.mouse.click(geo.right - 3, geo.top + geo.height / 2);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame !== 1);
+  const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.frame, st0.processed, 'the seek stops at the last tracked frame');
+  assert.equal(st.processed, st0.processed, 'a seek tracks nothing');
+  await page.waitForFunction((f) => document.getElementById('frame-no')?.textContent?.startsWith(`${f}/`), st.frame);
+  // End and Shift+→ stop there too.
+  await page.keyboard.press('Home');
+  await page.keyboard.press('Shift+ArrowRight');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame !== 1);
+  assert.equal((await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state())).frame, st0.processed);
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('an import opens on the first frame that has tracks', async () => {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  // A real file whose tracks start late: the TUD ground truth moved 40 frames on.
+  const gt = tudGt();
+  const late = gt.text
+    .trim()
+    .split('\n')
+    .map((l) => {
+      const [f, ...rest] = l.split(',');
+      return [Number(f) + 40, ...rest].join(',');
+    });
+  const first = Math.min(...late.map((l) => Number(l.split(',')[0])));
+  await page.setInputFiles('#file-import', { name: 'late.txt', mimeType: 'text/plain', buffer: Buffer.from(late.join('\n') + '\n') });
+  await page.waitForFunction(() => {
+    const s = /** @type {any} */ (window).__shapetrack.state();
+    return s.ids.length > 0 && s.frame > 0;
+  });
+  assert.equal((await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state())).frame, first, 'the first frame with tracks');
+  const shown = await page.evaluate(() => {
+    const st = /** @type {any} */ (window).__shapetrack;
+    return st.app.model.table.at(st.app.cur).length;
+  });
+  assert.ok(shown > 0, 'the frame shown has tracks');
   assert.deepEqual(errors, []);
   await page.close();
 });

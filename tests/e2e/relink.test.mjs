@@ -296,8 +296,15 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   const flagged = coco.annotations.reduce((/** @type {number} */ n, /** @type {any} */ a) => n + (a.interpolated ?? []).filter(Boolean).length, 0);
   assert.equal(flagged, offline.filter((r) => r.interpolated).length, 'COCO-video interpolated lists');
 
-  // Labelling holds on the re-linked ids: merge two tracks, undo it, then undo the pass.
-  const [a, b] = st.ids;
+  // Labelling holds on the re-linked ids: merge two tracks, undo it, then undo the pass. The
+  // two are never both seen in one frame (the app refuses to merge two objects).
+  /** @type {Map<number, Set<number>>} */
+  const seenAt = new Map();
+  for (const r of offline) if (!r.interpolated) seenAt.set(r.id, (seenAt.get(r.id) ?? new Set()).add(r.frame));
+  const apart = (/** @type {number} */ x, /** @type {number} */ y) => ![...(seenAt.get(x) ?? [])].some((f) => seenAt.get(y)?.has(f));
+  const pair = st.ids.flatMap((/** @type {number} */ x) => st.ids.filter((/** @type {number} */ y) => y !== x && apart(x, y)).map((/** @type {number} */ y) => [x, y]))[0];
+  assert.ok(pair, 'two re-linked tracks never seen in the same frame');
+  const [a, b] = pair;
   await page.evaluate(([x, y]) => {
     const app = /** @type {any} */ (window).__shapetrack.app;
     app.select(x, false);

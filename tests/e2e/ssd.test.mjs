@@ -175,6 +175,22 @@ test('the SSD detector finds the DAVIS car on most frames and the tracker keeps 
     `COCO categories name the class: ${JSON.stringify(coco.categories).slice(0, 200)}`,
   );
 
+  // And every text export writes each record's class, not −1: MOT's 8th column, MOTS's 3rd.
+  const classOf = new Map(records.map((r) => [`${r.frame},${r.id}`, r.class]));
+  for (const [format, col, sep] of /** @type {const} */ ([
+    ['mot', 7, ','],
+    ['mots', 2, ' '],
+  ])) {
+    const lines = (await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.exportText(f), format)).trim().split('\n');
+    assert.equal(lines.length, records.length, `${format}: a line per record`);
+    const wrong = lines.filter((/** @type {string} */ l) => {
+      const f = l.split(sep);
+      return Number(f[col]) !== classOf.get(`${f[0]},${f[1]}`);
+    });
+    assert.deepEqual(wrong.slice(0, 3), [], `${format}: the detector's class in every line`);
+    assert.ok(lines.some((/** @type {string} */ l) => Number(l.split(sep)[col]) === car), `${format}: the car's lines say ${car}`);
+  }
+
   // The id and class are drawn over the car (screenshot for a look).
   await page.keyboard.press('Home');
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().frame === 1);

@@ -8,6 +8,7 @@ import { Stage } from './view/stage.js';
 import { Timeline } from './view/timeline.js';
 import { Panel } from './view/panel.js';
 import { FpsMeter } from './lib/fps.js';
+import { colorOf } from './lib/colors.js';
 import { byId } from './lib/dom.js';
 import { startWorker } from './worker/protocol.js';
 import { listDetectors } from './worker/detectors.js';
@@ -93,15 +94,21 @@ export class App {
     /** Serialises frame grabs: one <video> can seek to one place at a time. */
     this.grabChain = Promise.resolve();
 
-    this.stage = new Stage(byId('frame', HTMLCanvasElement), byId('overlay', HTMLCanvasElement), (rle) =>
-      core.decodeMask(rle),
+    // A track keeps its colour when renumbered: the edit model knows which colour it wears.
+    /** @param {number} id */
+    const colour = (id) => colorOf(this.model.colourKey(id));
+    this.stage = new Stage(
+      byId('frame', HTMLCanvasElement),
+      byId('overlay', HTMLCanvasElement),
+      (rle) => core.decodeMask(rle),
+      colour,
     );
     this.stage.onResize = () => this.render();
     this.attached = this.worker.attach(byId('frame', HTMLCanvasElement));
     this.timeline = new Timeline(byId('timeline', HTMLCanvasElement), ({ id, frame, add }) => {
       if (id !== null) this.select(id, add);
       void this.seek(frame);
-    });
+    }, colour);
     this.panel = new Panel({
       onSelect: (id, add) => this.select(id, add),
       onAction: (a) => this.action(a),
@@ -111,7 +118,7 @@ export class App {
           this.model.reassign(this.need(this.selection.a), to);
           this.selection = { a: to, b: null };
         }),
-    });
+    }, colour);
     this.model.subscribe(() => {
       this.validateSelection();
       this.scoreSoon();
@@ -193,9 +200,18 @@ export class App {
 
   // ---------------------------------------------------------------- playback
 
-  /** Frames the scrubber can reach. */
+  /** Frames the scrubber and the timeline span (the whole source when its length is known). */
   get lastFrame() {
     return this.frames || Math.max(this.processed, this.model.table.lastFrame());
+  }
+
+  /**
+   * The last frame a seek may show: while tracking, the last frame tracked. A frame past it
+   * has no tracks yet, so showing its raw pixels under the frame counter would pass an
+   * untracked frame off as tracked; play (or →) tracks on from there.
+   */
+  get lastShown() {
+    return this.tracking ? this.processed : this.lastFrame;
   }
 
   async togglePlay() {
@@ -311,12 +327,11 @@ export class App {
     const inflight = [];
     let n = this.processed + 1;
     let lastDraw = 0;
-    const catchUp = this.cur > this.processed + 1;
     while (true) {
       while (this.playing && inflight.length < 2 && n <= until) {
         // Offline, paint a frame now and then so the labeller sees progress.
         const now = performance.now();
-        const paint = display === 'every' ? !catchUp || n >= this.cur : display === 'throttled' && now - lastDraw > OFFLINE_DRAW_MS;
+        const paint = display === 'every' || (display === 'throttled' && now - lastDraw > OFFLINE_DRAW_MS);
         if (paint) lastDraw = now;
         inflight.push(this.send(src, n++, paint));
       }
@@ -396,9 +411,12 @@ export class App {
     }
   }
 
-  /** @param {number} n */
+  /**
+   * Shows frame `n`, clamped to the frames that can be shown (`lastShown`).
+   * @param {number} n
+   */
   async seek(n) {
-    const target = Math.max(1, Math.min(this.lastFrame || 1, Math.round(n)));
+    const target = Math.max(1, Math.min(this.lastShown || 1, Math.round(n)));
     await this.show(target);
   }
 
@@ -526,7 +544,7 @@ export class App {
         this.edit(() => {
           if (y === null) throw new EditError('shift-click a second track to merge into the first');
           const { dropped } = this.model.merge(this.need(x), y);
-          if (dropped) return `merged; ${dropped} duplicate frame(s) kept from ${x}`;
+          if (dropped) return `merge ${y} into ${x}: ${dropped} filled-in shape(s) gave way to seen ones`;
         });
         break;
       case 'swap':
@@ -613,9 +631,12 @@ export class App {
       this.stage.resize(Math.max(1, Math.ceil(w)), Math.max(1, Math.ceil(h)));
       byId('empty').hidden = true;
     }
-    this.frames = Math.max(this.frames, parsed.frames ?? 0, this.model.table.lastFrame());
-    this.status(`${name}: ${records.length} records, ${this.model.table.ids().length} tracks`);
-    await this.seek(this.cur || 1);
+    const table = this.model.table;
+    this.frames = Math.max(this.frames, parsed.frames ?? 0, table.lastFrame());
+    this.status(`${name}: ${records.length} records, ${table.ids().length} tracks`);
+    // Stay on the frame shown if the import has tracks there; else open on the first frame that
+    // has any (without a source, an empty frame is a blank canvas: it looks like a failed import).
+    await this.seek(this.cur && table.at(this.cur).length ? this.cur : table.firstFrame() || 1);
   }
 
   /** @param {string} name @param {string} text */
@@ -879,11 +900,11 @@ export class App {
       case 'back10':
         return this.seek(this.cur - 10);
       case 'fwd10':
-        return this.seek(Math.min(this.cur + 10, this.tracking ? this.processed : this.lastFrame));
+        return this.seek(this.cur + 10);
       case 'first':
         return this.seek(1);
       case 'last':
-        return this.seek(this.tracking ? this.processed : this.lastFrame);
+        return this.seek(this.lastShown);
       case 'merge':
       case 'swap':
       case 'split':

@@ -46,6 +46,10 @@ async function main() {
     Promise.resolve(app.key(a)).catch((err) => app.fail(err));
   });
   byId('help').addEventListener('click', () => void app.key('help'));
+  byId('legend-open').addEventListener('click', () => {
+    void app.key('help');
+    byId('legend').scrollIntoView({ block: 'nearest' });
+  });
   byId('help-table').replaceChildren(...SHORTCUTS.map((s) => h('tr', {}, [h('td', {}, [h('kbd', {}, [s.keys])]), h('td', {}, [s.what])])));
 
   exposeForTests(app);

@@ -1,7 +1,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { TrackTable } from '../src/model/tracks.js';
-import { EditModel, EditError } from '../src/model/edits.js';
+import { EditModel, EditError, frameRanges } from '../src/model/edits.js';
 
 /** A record of track `id` in `frame` whose box encodes both, so moves are traceable. */
 const rec = (frame, id) => ({ frame, id, bbox: { x: frame * 10, y: id, w: 5, h: 5 } });
@@ -34,6 +34,11 @@ test('table indexes by frame and id, and runs compress gaps', () => {
   assert.deepEqual(t.span(2), [1, 4]);
   assert.equal(t.size, 4);
   assert.equal(t.lastFrame(), 4);
+  assert.equal(t.firstFrame(), 1);
+  t.remove(/** @type {any} */ (t.get(1, 2)));
+  assert.equal(t.firstFrame(), 2);
+  assert.equal(new TrackTable().firstFrame(), 0);
+  t.add(rec(1, 2));
   assert.equal(t.maxId(), 5);
   assert.deepEqual(t.all().map((r) => [r.frame, r.id]), [[1, 2], [2, 2], [2, 5], [4, 2]]);
   // Replacing at the same place returns the old record; removing a stale object is a no-op.
@@ -56,13 +61,33 @@ test('merge moves every record and undo/redo restore exactly', () => {
   assert.equal(m.redo(), null);
 });
 
-test('merge of overlapping tracks keeps the kept track in shared frames', () => {
-  const m = model({ 1: [1, 2, 3], 2: [3, 4] });
-  assert.deepEqual(m.merge(1, 2), { dropped: 1 });
-  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4] });
-  assert.deepEqual(origin(m.table, 3, 1), { x: 30, y: 1, w: 5, h: 5 });
+test('tracks both seen in one frame are two objects: the merge is refused, nothing is lost', () => {
+  const m = model({ 1: [1, 2, 3, 4], 2: [3, 4, 6, 9, 10] });
+  assert.throws(() => m.merge(1, 2), (e) => e instanceof EditError && /both seen in frames 3–4 \(2 frames\)/.test(e.message));
+  assert.throws(() => m.reassign(2, 1), /tracks 1 and 2 are both seen in frames 3–4/, 'renumbering onto a track is a merge');
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4], 2: [3, 4, 6, 9, 10] });
+  assert.equal(m.canUndo, false, 'a refused edit is not in the history');
+  assert.equal(frameRanges([3]), '3');
+  assert.equal(frameRanges([1, 2, 3, 5, 7, 8]), '1–3, 5, 7–8 (6 frames)');
+  assert.equal(frameRanges([1, 3, 5, 7, 9]), '1, 3, 5, … (5 frames)');
+});
+
+test('a merge over filled-in shapes keeps what was seen', () => {
+  const filled = (/** @type {number} */ f, /** @type {number} */ id) => ({ ...rec(f, id), interpolated: true });
+  // 1 coasted through frames 3–4 while 2 was seen there; 2 was filled in at 6 where 1 was seen;
+  // both were filled in at 7.
+  const m = new EditModel(
+    new TrackTable([rec(1, 1), rec(2, 1), filled(3, 1), filled(4, 1), rec(6, 1), filled(7, 1), rec(3, 2), rec(4, 2), filled(6, 2), filled(7, 2), rec(8, 2)]),
+  );
+  assert.deepEqual(m.merge(1, 2), { dropped: 4 });
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 6, 7, 8] });
+  for (const f of [3, 4, 8]) assert.equal(origin(m.table, f, 1)?.y, 2, `frame ${f}: the seen shape of 2`);
+  assert.equal(m.table.get(3, 1)?.interpolated, undefined);
+  assert.equal(origin(m.table, 6, 1)?.y, 1, 'frame 6: the seen shape of 1');
+  assert.equal(origin(m.table, 7, 1)?.y, 1, 'frame 7: both filled in, the kept track’s');
   m.undo();
-  assert.deepEqual(layout(m.table), { 1: [1, 2, 3], 2: [3, 4] });
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 6, 7], 2: [3, 4, 6, 7, 8] });
+  assert.equal(m.table.get(3, 1)?.interpolated, true);
 });
 
 test('split gives the later part a fresh id above every id', () => {
@@ -101,6 +126,32 @@ test('reassign renumbers, or merges when the number is taken', () => {
   assert.deepEqual(layout(m.table), { 1: [1, 2], 2: [4] });
 });
 
+test('a renumbered track keeps its colour, through undo, redo and renumbering again', () => {
+  const m = model({ 1: [1, 2], 2: [4], 3: [5] });
+  m.reassign(1, 10);
+  assert.equal(m.colourKey(10), 1, 'track 10 wears the colour it had as 1');
+  m.reassign(10, 20);
+  assert.equal(m.colourKey(20), 1);
+  assert.equal(m.colourKey(10), 10, 'the number it left has no colour of its own left over');
+  // Another track given the freed number wears its own colour, not the renumbered one's.
+  m.reassign(3, 1);
+  assert.equal(m.colourKey(1), 3);
+  m.undo();
+  assert.equal(m.colourKey(1), 1);
+  assert.equal(m.colourKey(20), 1);
+  m.undo();
+  assert.equal(m.colourKey(10), 1);
+  m.redo();
+  assert.equal(m.colourKey(20), 1);
+  // Merged into another track, it takes that track's colour: it is that object now.
+  m.reassign(2, 20);
+  assert.equal(m.colourKey(20), 1);
+  m.reassign(20, 2);
+  assert.equal(m.colourKey(2), 1);
+  m.replaceAll([rec(1, 2)]);
+  assert.equal(m.colourKey(2), 2, 'an import starts with every id its own colour');
+});
+
 test('delete a track and a single record, both undoable', () => {
   const m = model({ 1: [1, 2], 2: [1, 2] });
   m.deleteTrack(2);
@@ -124,8 +175,8 @@ test('a new edit drops the redo stack', () => {
 
 test('edits keep holding for frames the tracker has not delivered yet', () => {
   const m = new EditModel();
-  m.ingest([rec(1, 1), rec(1, 2), rec(1, 3)]);
-  m.ingest([rec(2, 1), rec(2, 2), rec(2, 3)]);
+  m.ingest([rec(1, 1), rec(1, 3)]);
+  m.ingest([rec(2, 2), rec(2, 3)]);
   m.merge(1, 2); // 2 is 1 from now on
   m.deleteTrack(3); // 3 is a false track
   m.ingest([rec(3, 2), rec(3, 3), rec(3, 4)]);
@@ -162,17 +213,19 @@ test('a tracker id that collides with a labeller id is moved aside', () => {
 
 test('renumbering during tracking follows the tracker id, merges of two keep the first', () => {
   const m = new EditModel();
-  m.ingest([rec(1, 1), rec(1, 2)]);
+  m.ingest([rec(1, 1)]);
+  m.ingest([rec(2, 2)]);
   m.reassign(1, 9);
   m.merge(9, 2);
-  m.ingest([rec(2, 1), rec(2, 2)]);
-  assert.deepEqual(layout(m.table), { 9: [1, 2] });
-  assert.equal(m.table.get(2, 9)?.bbox.y, 1);
+  m.ingest([rec(3, 1), rec(3, 2)]);
+  assert.deepEqual(layout(m.table), { 9: [1, 2, 3] });
+  assert.equal(m.table.get(3, 9)?.bbox.y, 1);
 });
 
 test('replaceAll (an import) starts afresh', () => {
   const m = new EditModel();
-  m.ingest([rec(1, 1), rec(1, 2)]);
+  m.ingest([rec(1, 1)]);
+  m.ingest([rec(2, 2)]);
   m.merge(1, 2);
   m.replaceAll([rec(1, 1), rec(2, 2)]);
   assert.deepEqual(layout(m.table), { 1: [1], 2: [2] });
@@ -201,9 +254,9 @@ test('the offline pass joins tracks and fills gaps as one undoable edit', () => 
   assert.deepEqual(origin(m.table, 8, 1), { x: 80, y: 2, w: 5, h: 5 }, 'the joined records are the tracker\'s');
   assert.equal(m.resolve(2), 1, 'later output of tracker 2 goes to 1');
   // Edits work on the joined identity, and undo takes them back one by one, then the pass.
-  m.merge(1, 3);
-  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4, 5, 6, 7, 8, 9] });
-  assert.equal(m.undo(), 'merge 3 into 1');
+  assert.equal(m.split(1, 5), 4);
+  assert.deepEqual(layout(m.table), { 1: [1, 2, 3, 4], 3: [1, 2, 3, 4, 5, 6, 7, 8, 9], 4: [5, 6, 7, 8, 9] });
+  assert.equal(m.undo(), 'split 1 at frame 5 as 4');
   assert.equal(m.undo(), 'offline pass: 1 join(s), 3 filled');
   assert.deepEqual(layout(m.table), online);
   assert.equal(m.resolve(2), 2);

@@ -20,7 +20,17 @@ export function hslToRgb(h, s, l) {
   return [f(0), f(8), f(4)];
 }
 
-/** @param {number} id */
+/**
+ * @typedef {{ css: string, rgb: [number, number, number] }} Colour
+ * @typedef {(id: number) => Colour} ColourOf how views colour a track id (the app's keeps a
+ *   renumbered track's colour)
+ */
+
+/**
+ * The colour of an id.
+ * @param {number} id
+ * @returns {Colour}
+ */
 export function colorOf(id) {
   let c = cache.get(id);
   if (!c) {

@@ -54,7 +54,7 @@ bind('D', 'demo', 'start the demo scene', plain('d'));
 bind('O', 'open', 'open a video', plain('o'));
 bind('I', 'import', 'import tracks', plain('i'));
 bind('E', 'export', 'export tracks', plain('e'));
-bind('?', 'help', 'this help', (e) => e.key === '?');
+bind('?', 'help', 'this help and the legend of the marks', (e) => e.key === '?');
 
 /**
  * @param {KeyLike} e

@@ -25,6 +25,8 @@ import { TrackTable } from './tracks.js';
  *   aliasesAfter: Map<number, number | null>,
  *   nextIdBefore: number,
  *   nextIdAfter: number,
+ *   coloursBefore: Map<number, number>,
+ *   coloursAfter: Map<number, number>,
  * }} Patch
  */
 
@@ -44,6 +46,24 @@ export class EditError extends Error {
  */
 const withId = (r, id) => ({ ...r, id });
 
+/**
+ * Ascending frame numbers as short text for a message: `3–7, 9, 12–40 (13 frames)`; past four
+ * runs, the first three and "…".
+ * @param {number[]} frames ascending
+ */
+export function frameRanges(frames) {
+  /** @type {string[]} */
+  const parts = [];
+  for (let i = 0; i < frames.length; ) {
+    let k = i;
+    while (k + 1 < frames.length && frames[k + 1] === frames[k] + 1) k++;
+    parts.push(k > i ? `${frames[i]}–${frames[k]}` : String(frames[i]));
+    i = k + 1;
+  }
+  const shown = parts.length > 4 ? [...parts.slice(0, 3), '…'] : parts;
+  return `${shown.join(', ')}${frames.length > 1 ? ` (${frames.length} frames)` : ''}`;
+}
+
 export class EditModel {
   /** @param {TrackTable} [table] */
   constructor(table = new TrackTable()) {
@@ -60,6 +80,12 @@ export class EditModel {
     this.labellerIds = new Set();
     /** Above every id seen so far: what the next labeller-made track gets. */
     this.nextId = table.maxId() + 1;
+    /**
+     * Shown id → the id whose colour it wears, for tracks that were renumbered (absent: its
+     * own). A track's colour is how a labeller follows it; a new number must not change it.
+     * @type {Map<number, number>}
+     */
+    this.colours = new Map();
     /** @type {Patch[]} */
     this.undoStack = [];
     /** @type {Patch[]} */
@@ -94,6 +120,15 @@ export class EditModel {
   }
 
   /**
+   * The id whose colour track `id` is drawn in (its own unless it was renumbered).
+   * @param {number} id
+   * @returns {number}
+   */
+  colourKey(id) {
+    return this.colours.get(id) ?? id;
+  }
+
+  /**
    * Whether a tracker id seen for the first time would collide with an id already in use
    * (a labeller's split, a renumbering, an imported track).
    * @param {number} id
@@ -118,8 +153,8 @@ export class EditModel {
         if (!this.aliases.has(r.id) && this.taken(r.id)) this.aliases.set(r.id, this.nextId++);
       }
       const id = this.resolve(r.id);
-      // Two tracker tracks the labeller declared one object can both appear in a frame:
-      // keep the first, as a merge does.
+      // Two tracker tracks the labeller declared one object (a merge of fragments) can both
+      // appear in a later frame: the labeller's word holds and the first is kept there.
       if (id === null || this.table.get(frame, id)) continue;
       this.table.add(id === r.id ? r : withId(r, id));
       if (id >= this.nextId) this.nextId = id + 1;
@@ -138,6 +173,7 @@ export class EditModel {
     this.labellerIds = new Set();
     this.table = new TrackTable(records);
     this.nextId = this.table.maxId() + 1;
+    this.colours = new Map();
     this.undoStack = [];
     this.redoStack = [];
     this.emit();
@@ -258,8 +294,9 @@ export class EditModel {
    * @param {Map<number, number | null>} renames shown id → new shown id (null: deleted), for
    *   frames still to come from the tracker
    * @param {number} [nextIdAfter]
+   * @param {Map<number, number>} [coloursAfter] the colour map after the edit (default: as is)
    */
-  commit(label, removed, added, renames, nextIdAfter = this.nextId) {
+  commit(label, removed, added, renames, nextIdAfter = this.nextId, coloursAfter = this.colours) {
     const aliasesAfter = new Map();
     for (const [t, shown] of this.aliases) {
       aliasesAfter.set(t, shown !== null && renames.has(shown) ? /** @type {number | null} */ (renames.get(shown)) : shown);
@@ -278,6 +315,8 @@ export class EditModel {
       aliasesAfter,
       nextIdBefore: this.nextId,
       nextIdAfter,
+      coloursBefore: this.colours,
+      coloursAfter,
     };
     this.applyPatch(patch);
     this.undoStack.push(patch);
@@ -292,6 +331,7 @@ export class EditModel {
     for (const r of p.added) this.table.add(r);
     this.aliases = new Map(p.aliasesAfter);
     this.nextId = p.nextIdAfter;
+    this.colours = p.coloursAfter;
   }
 
   /** @param {Patch} p */
@@ -300,6 +340,7 @@ export class EditModel {
     for (const r of p.removed) this.table.add(r);
     this.aliases = new Map(p.aliasesBefore);
     this.nextId = p.nextIdBefore;
+    this.colours = p.coloursBefore;
   }
 
   /** @returns {string | null} the label of the undone edit */
@@ -336,29 +377,50 @@ export class EditModel {
   }
 
   /**
-   * Merges track `drop` into track `keep`: one object, two fragments. Where both have a record
-   * in the same frame the kept track's record stays and the other is dropped (a duplicate).
+   * Merges track `drop` into track `keep`: one object, two fragments. One object is in one
+   * place per frame, so two tracks both seen in the same frame are two objects: the merge is
+   * refused (an `EditError` naming the frames) rather than one side's shapes silently lost.
+   * Where only one side was seen and the other's shape was filled in (coasted over a missed
+   * detection, or interpolated by the offline pass), the seen one is kept; where both were
+   * filled in, the kept track's.
    * @param {number} keep
    * @param {number} drop
-   * @returns {{ dropped: number }} how many duplicate records were dropped
+   * @returns {{ dropped: number }} how many filled-in shapes gave way to the other track's
    */
   merge(keep, drop) {
     if (keep === drop) throw new EditError('cannot merge a track with itself');
     this.requireTrack(keep);
     this.requireTrack(drop);
-    const removed = this.table.track(drop);
+    const moved = this.table.track(drop);
+    /** @type {TrackRecord[]} the kept track's filled-in shapes that give way */
+    const replaced = [];
     const added = [];
+    /** @type {number[]} */
+    const both = [];
     let dropped = 0;
-    for (const r of removed) {
-      if (this.table.get(r.frame, keep)) dropped++;
-      else added.push(withId(r, keep));
+    for (const r of moved) {
+      const there = this.table.get(r.frame, keep);
+      if (!there) added.push(withId(r, keep));
+      else if (!there.interpolated && !r.interpolated) both.push(r.frame);
+      else if (there.interpolated && !r.interpolated) {
+        replaced.push(there);
+        added.push(withId(r, keep));
+        dropped++;
+      } else dropped++;
     }
-    this.commit(`merge ${drop} into ${keep}`, removed, added, new Map([[drop, keep]]));
+    if (both.length) {
+      throw new EditError(
+        `tracks ${keep} and ${drop} are both seen in frame${both.length === 1 ? '' : 's'} ${frameRanges(both)}: ` +
+          'two objects, not one — to fix an identity switch use Swap (W), or split or delete the overlap first',
+      );
+    }
+    this.commit(`merge ${drop} into ${keep}`, [...moved, ...replaced], added, new Map([[drop, keep]]));
     return { dropped };
   }
 
   /**
-   * Gives track `id` the number `to`. When `to` is already a track this is a merge.
+   * Gives track `id` the number `to`, keeping its colour. When `to` is already a track this is
+   * a merge.
    * @param {number} id
    * @param {number} to
    */
@@ -372,7 +434,13 @@ export class EditModel {
     }
     const removed = this.table.track(id);
     const added = removed.map((r) => withId(r, to));
-    this.commit(`renumber ${id} as ${to}`, removed, added, new Map([[id, to]]), Math.max(this.nextId, to + 1));
+    // Patches hold their colour maps: a fresh map per edit, never changed afterwards.
+    const colours = new Map(this.colours);
+    const key = this.colourKey(id);
+    colours.delete(id);
+    if (key === to) colours.delete(to);
+    else colours.set(to, key);
+    this.commit(`renumber ${id} as ${to}`, removed, added, new Map([[id, to]]), Math.max(this.nextId, to + 1), colours);
   }
 
   /**

@@ -141,6 +141,13 @@ export class TrackTable {
     return out;
   }
 
+  /** Smallest frame number with a record (0 when empty). */
+  firstFrame() {
+    let lo = 0;
+    for (const f of this.byFrame.keys()) if (lo === 0 || f < lo) lo = f;
+    return lo;
+  }
+
   /** Largest frame number with a record (0 when empty). */
   lastFrame() {
     let hi = 0;

@@ -10,11 +10,6 @@ import { colorOf } from '../lib/colors.js';
  * @typedef {import('../../pkg/shapetrack.js').Scores} Scores  percentages, as TrackEval prints them
  */
 
-/** @param {HTMLElement} chip @param {number} id */
-function paintChip(chip, id) {
-  chip.textContent = String(id);
-  chip.style.background = colorOf(id).css;
-}
 
 export class Panel {
   /**
@@ -23,9 +18,11 @@ export class Panel {
    *   onAction: (a: 'merge' | 'swap' | 'split' | 'renumber' | 'delete' | 'undo' | 'redo') => void,
    *   onRenumber: (id: number) => void,
    * }} handlers
+   * @param {import('../lib/colors.js').ColourOf} [colour] a track's colour by id
    */
-  constructor(handlers) {
+  constructor(handlers, colour = colorOf) {
     this.handlers = handlers;
+    this.colour = colour;
     this.none = byId('sel-none');
     this.info = byId('sel-info');
     this.chipA = byId('sel-a');
@@ -63,6 +60,12 @@ export class Panel {
     this.listKey = '';
   }
 
+  /** @param {HTMLElement} chip @param {number} id */
+  paintChip(chip, id) {
+    chip.textContent = String(id);
+    chip.style.background = this.colour(id).css;
+  }
+
   /** Hides the inline "new id" field (Escape, or the selection went away). */
   cancelRenumber() {
     this.renumberForm.hidden = true;
@@ -87,9 +90,9 @@ export class Panel {
     this.none.hidden = has;
     this.info.hidden = !has;
     if (has && a !== null) {
-      paintChip(this.chipA, a);
+      this.paintChip(this.chipA, a);
       this.chipB.hidden = b === null;
-      if (b !== null) paintChip(this.chipB, b);
+      if (b !== null) this.paintChip(this.chipB, b);
       const span = table.span(a);
       const recs = table.track(a);
       const runs = table.runs(a).length;
@@ -133,7 +136,7 @@ export class Panel {
     const items = ids.slice(0, cap).map((id) => {
       const span = table.span(id);
       const li = h('li', { 'data-id': String(id), class: id === selection.a || id === selection.b ? 'sel' : '' }, [
-        h('span', { class: 'sw', style: `background:${colorOf(id).css}` }),
+        h('span', { class: 'sw', style: `background:${this.colour(id).css}` }),
         h('span', {}, [String(id)]),
         h('span', { class: 'span' }, [span ? `${span[0]}–${span[1]}` : '']),
       ]);

@@ -22,15 +22,17 @@ export class Stage {
    * @param {HTMLCanvasElement} frameCanvas
    * @param {HTMLCanvasElement} overlayCanvas
    * @param {MaskDecoder} decode
+   * @param {import('../lib/colors.js').ColourOf} [colour] a track's colour by id
    */
-  constructor(frameCanvas, overlayCanvas, decode) {
+  constructor(frameCanvas, overlayCanvas, decode, colour = colorOf) {
+    this.colour = colour;
     this.frameCanvas = frameCanvas;
     this.overlay = overlayCanvas;
     this.decode = decode;
     this.octx = /** @type {CanvasRenderingContext2D} */ (overlayCanvas.getContext('2d'));
     /**
-     * Decoded, tinted masks by record object: edits make new record objects, so a renamed
-     * track gets its new colour without any invalidation logic.
+     * Decoded, tinted masks by record object: edits make new record objects, so a track whose
+     * colour changed (a merge into another) is redrawn without any invalidation logic.
      * @type {WeakMap<TrackRecord, { canvas: OffscreenCanvas, bitmap: Bitmap } | null>}
      */
     this.maskCache = new WeakMap();
@@ -91,7 +93,7 @@ export class Stage {
         const canvas = new OffscreenCanvas(bm.width, bm.height);
         const ctx = /** @type {OffscreenCanvasRenderingContext2D} */ (canvas.getContext('2d'));
         const img = ctx.createImageData(bm.width, bm.height);
-        const [cr, cg, cb] = colorOf(r.id).rgb;
+        const [cr, cg, cb] = this.colour(r.id).rgb;
         const px = img.data;
         for (let i = 0; i < bm.data.length; i++) {
           if (bm.data[i]) {
@@ -150,7 +152,7 @@ export class Stage {
     ctx.font = `600 ${font}px system-ui, sans-serif`;
     ctx.textBaseline = 'top';
     for (const r of records) {
-      const { css } = colorOf(r.id);
+      const { css } = this.colour(r.id);
       const sel = selected(r.id);
       const b = r.bbox;
       // A filled-in shape always gets its dashed outline: that is what marks it.
@@ -194,7 +196,7 @@ export class Stage {
       if (r) pts.push([r.bbox.x + r.bbox.w / 2, r.bbox.y + r.bbox.h / 2]);
     }
     if (pts.length < 2) return;
-    ctx.strokeStyle = colorOf(id).css;
+    ctx.strokeStyle = this.colour(id).css;
     ctx.lineWidth = sel ? line * 1.6 : line;
     ctx.lineCap = 'round';
     for (let i = 1; i < pts.length; i++) {

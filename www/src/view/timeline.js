@@ -18,8 +18,10 @@ export class Timeline {
   /**
    * @param {HTMLCanvasElement} canvas
    * @param {(pick: { id: number | null, frame: number, add: boolean }) => void} onPick
+   * @param {import('../lib/colors.js').ColourOf} [colour] a track's colour by id
    */
-  constructor(canvas, onPick) {
+  constructor(canvas, onPick, colour = colorOf) {
+    this.colour = colour;
     this.canvas = canvas;
     this.ctx = /** @type {CanvasRenderingContext2D} */ (canvas.getContext('2d'));
     this.onPick = onPick;
@@ -33,7 +35,7 @@ export class Timeline {
     this.key = '';
     this.barsAt = 0;
     this.bars = document.createElement('canvas');
-    /** Hatch patterns for filled-in spans, by id and size. @type {Map<string, CanvasPattern | null>} */
+    /** Hatch patterns for filled-in spans, by colour and size. @type {Map<string, CanvasPattern | null>} */
     this.hatches = new Map();
     /** @type {Parameters<Timeline['render']>[0] | null} */
     this.last = null;
@@ -147,16 +149,17 @@ export class Timeline {
    */
   hatch(ctx, id, dpr) {
     const n = Math.max(4, Math.round(5 * dpr));
-    const key = `${id}:${n}`;
+    const { css, rgb } = this.colour(id);
+    const key = `${css}:${n}`;
     let p = this.hatches.get(key);
     if (p === undefined) {
       const tile = document.createElement('canvas');
       tile.width = tile.height = n;
       const g = /** @type {CanvasRenderingContext2D} */ (tile.getContext('2d'));
-      const [r, gr, b] = colorOf(id).rgb;
+      const [r, gr, b] = rgb;
       g.fillStyle = `rgba(${r},${gr},${b},0.22)`;
       g.fillRect(0, 0, n, n);
-      g.strokeStyle = colorOf(id).css;
+      g.strokeStyle = css;
       g.lineWidth = Math.max(1, dpr * 1.2);
       g.beginPath();
       // The main diagonal and the two corner pieces: the tile repeats seamlessly.
@@ -190,7 +193,7 @@ export class Timeline {
     for (let row = 0; row < rows && row + this.scroll < this.ids.length; row++) {
       const id = this.ids[row + this.scroll];
       const y = 2 + row * this.rowH;
-      const solid = colorOf(id).css;
+      const solid = this.colour(id).css;
       for (const [a, b, filled] of table.spans(id)) {
         ctx.fillStyle = filled ? (this.hatch(ctx, id, dpr) ?? solid) : solid;
         // At least one device pixel wide, so a single-frame track is still visible.
