@@ -1226,6 +1226,14 @@ pub struct TrackerConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]
     pub max_cost: Option<f64>,
+    /// The main gate at 30 fps (scaled by the frame interval, at most `max_cost`); `null`:
+    /// `max_cost` at any frame rate.
+    #[serde(
+        deserialize_with = "double_option",
+        skip_serializing_if = "Option::is_none"
+    )]
+    #[tsify(optional, type = "number | null")]
+    pub reference_max_cost: Option<Option<f64>>,
     /// Highest cost accepted for a low detection.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[tsify(optional)]

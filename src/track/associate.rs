@@ -131,7 +131,7 @@ pub(crate) fn in_main(config: &Config, track: &Track) -> bool {
 ///
 /// 1. tracks seen in the previous frame × high detections (with lost tracks in the same
 ///    assignment, after it with [`Config::lost_second`], or not at all with
-///    [`Config::lost_reid_only`]), up to [`Config::max_cost`];
+///    [`Config::lost_reid_only`]), up to [`Config::main_max_cost`];
 /// 2. tracks seen in the previous frame × low detections, up to [`Config::max_cost_low`]
 ///    (ByteTrack's second association);
 /// 3. tentative tracks × high detections, up to [`Config::max_cost_tentative`], and the
@@ -153,20 +153,30 @@ pub fn stages(config: &Config) -> Vec<Stage> {
             "confirmed",
             main_tracks(config),
             High,
-            config.max_cost,
+            config.main_max_cost(),
         ));
     } else if config.lost_second {
         out.push(main(
             "confirmed",
             StageTracks::Confirmed,
             High,
-            config.max_cost,
+            config.main_max_cost(),
         ));
-        out.push(main("lost", StageTracks::Lost, High, config.max_cost));
+        out.push(main(
+            "lost",
+            StageTracks::Lost,
+            High,
+            config.main_max_cost(),
+        ));
     } else if config.tentative_first {
-        out.push(main("all", StageTracks::All, High, config.max_cost));
+        out.push(main("all", StageTracks::All, High, config.main_max_cost()));
     } else {
-        out.push(main("active", StageTracks::Active, High, config.max_cost));
+        out.push(main(
+            "active",
+            StageTracks::Active,
+            High,
+            config.main_max_cost(),
+        ));
     }
     out.push(main(
         "low",
@@ -288,6 +298,24 @@ pub(crate) fn score_edges(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_main_stage_gate_follows_the_frame_rate() {
+        let at = |fps| {
+            stages(&Config {
+                frame_rate: Some(fps),
+                ..Config::masks()
+            })
+        };
+        assert!((at(30.0)[0].max_cost - 0.54).abs() < 1e-12);
+        assert_eq!(at(5.0)[0].max_cost, Config::masks().max_cost);
+        // The second (low) and tentative stages keep their own gates.
+        let (s, m) = (at(30.0), Config::masks());
+        let gate = |name| s.iter().find(|st| st.name == name).map(|st| st.max_cost);
+        assert_eq!(gate("low"), Some(m.max_cost_low));
+        assert_eq!(gate("tentative"), Some(m.max_cost_tentative));
+        assert_eq!(gate("reid"), Some(m.reid_max_cost));
+    }
 
     #[test]
     fn stage_order_follows_the_config() {

@@ -246,6 +246,12 @@ pub struct Config {
     /// Highest combined cost accepted between an active or lost track and a high detection.
     /// Default 0.75 (with IoU alone: IoU ≥ 0.25).
     pub max_cost: f64,
+    /// The main stage's gate at [`Config::frame_counts_at`] fps, when the frame rate is known:
+    /// it grows with the time between frames (a true match's shift, and so its cost, does),
+    /// capped at `max_cost` ([`Config::main_max_cost`]). Ragged masks at 30 fps need a tighter
+    /// gate than 0.75 (or a track takes a split piece or a neighbour when its own mask is
+    /// missed), 5 fps footage a looser one. Default `None` (`max_cost` at any rate).
+    pub reference_max_cost: Option<f64>,
     /// Highest combined cost accepted between a track and a low detection (second stage).
     /// Default 0.5: a low-confidence box must overlap the prediction well.
     pub max_cost_low: f64,
@@ -404,6 +410,7 @@ impl Default for Config {
             region_margin: 0.5,
             region_margin_per_miss: 0.1,
             max_cost: 0.75,
+            reference_max_cost: None,
             max_cost_low: 0.5,
             max_cost_tentative: 0.9,
             unmatched_cost: None,
@@ -439,87 +446,6 @@ impl Default for Config {
             frame_counts_at: 30.0,
             report_box: ReportBox::Adaptive,
             camera_motion: true,
-        }
-    }
-}
-
-impl Config {
-    /// The preset for instance masks with frames (synthetic scenes, MOTS, DAVIS): the
-    /// defaults with the changes below, chosen on the mask cells of the robustness grid (the
-    /// synthetic families under clean and ragged masks, and BDD100K's model masks; see
-    /// `tests/data/quality/README.md`).
-    ///
-    /// - Geometry and motion: box IoU (weight 1) and IoA (0.5) with the (amodal) predicted
-    ///   box, and mask IoU (1) with the last mask moved by the predicted motion; in clusters
-    ///   geometry cannot decide, colour C2 joins them (weight 0.5, thesis eq. 39). Shape
-    ///   context C1 is off in the association: on the grid's clean-mask cells it decides
-    ///   nothing (identical scores), on ragged masks it gains 0.3–1.6 HOTA on four families
-    ///   but costs 2.1 on non-rigid deformation, whose changing outline it reads as another
-    ///   shape — the family where masks must beat box mode and keep one id per shape (the
-    ///   ablation in `tests/data/quality/README.md`).
-    /// - A detection is taken as partly hidden only below 0.4 of the track's reference area
-    ///   (`appearance.whole_ratio`): shapes that deform change area by up to ±50 % while in
-    ///   full view, and 0.85 read that as occlusion (and split them into several identities).
-    /// - Lost tracks are matched only by re-identification (`lost_reid_only`), except in
-    ///   the 8 frames after a whole view (`lost_main_frames`, the coasting span; mask cells:
-    ///   mean HOTA 71.92 → 72.30, ragged crowds +3.0, ragged occluders −2.2): the detection
-    ///   must lie inside the lost track's predicted box (grown by a quarter of its size on
-    ///   each side, more with every missed frame: IoA gate 0.5), and its colours must be the
-    ///   track's (reference view, gate 0.5); SIFT matches count too. At confirmation a new
-    ///   track is checked against the lost ones (`reid_at_confirmation`).
-    /// - Shapes hide behind occluders for up to ~2 s: `max_lost` 60 (at 30 fps).
-    /// - Detector-split masks are merged (`merge_fragments`); missed detections right after a
-    ///   whole view are coasted over for 8 frames (`coast_frames`, always: a mask seen whole
-    ///   does not vanish).
-    /// - Confirmed after 8 matches (by evidence, as the defaults), tolerating one miss while
-    ///   tentative: ragged masks start many short-lived tracks.
-    pub fn masks() -> Self {
-        let base = Self::default();
-        Self {
-            high_score: 0.3,
-            new_track_score: 0.5,
-            min_hits: 8,
-            appearance: AppearanceConfig {
-                whole_ratio: 0.4,
-                ..AppearanceConfig::default()
-            },
-            max_tentative_misses: 1,
-            max_lost: 60,
-            coast_frames: 8,
-            coasting: None,
-            reid_at_confirmation: true,
-            merge_fragments: true,
-            lost_reid_only: true,
-            lost_main_frames: 8,
-            // Chosen without it; on the mask cells it gains on ragged masks and loses
-            // BDD100K's real masks to ByteTrack (59.8 vs 60.4), so the preset keeps it off.
-            reupdate_after_gap: false,
-            terms: Terms {
-                iou: TermConfig::weighted(1.0),
-                ioa: TermConfig::weighted(0.5),
-                mask_iou: TermConfig::weighted(1.0),
-                shape_context: TermConfig::weighted(0.0),
-                colour: TermConfig::weighted(0.5),
-                ..Terms::default()
-            },
-            reid_terms: Terms {
-                iou: TermConfig::weighted(0.0),
-                mask_iou: TermConfig::weighted(0.0),
-                ioa: TermConfig {
-                    weight: 1.0,
-                    gate: Some(0.5),
-                    scale: 1.5,
-                },
-                shape_context: TermConfig::weighted(0.0),
-                colour: TermConfig {
-                    weight: 1.0,
-                    gate: Some(0.5),
-                    scale: 1.0,
-                },
-                sift: TermConfig::weighted(0.5),
-                ..Terms::default()
-            },
-            ..base
         }
     }
 }
@@ -610,31 +536,35 @@ impl Config {
                 "must be in (0, 1]",
             )?;
         }
+        let sub = |(field, value, reason): (&str, f64, &'static str)| TrackError::InvalidConfig {
+            field: field.to_string(),
+            value,
+            reason,
+        };
         if let Some(a) = &self.coasting {
-            a.validate()
-                .map_err(|(field, value, reason)| TrackError::InvalidConfig {
-                    field: field.to_string(),
-                    value,
-                    reason,
-                })?;
+            a.validate().map_err(sub)?;
         }
         if let Some(a) = &self.score_adaptation {
-            a.validate()
-                .map_err(|(field, value, reason)| TrackError::InvalidConfig {
-                    field: field.to_string(),
-                    value,
-                    reason,
-                })?;
+            a.validate().map_err(sub)?;
+        }
+        if let Some(g) = self.reference_max_cost {
+            check("reference_max_cost", g, g >= 0.0, "must be ≥ 0")?;
         }
         self.motion.validate()?;
-        self.appearance
-            .validate()
-            .map_err(|(field, value, reason)| TrackError::InvalidConfig {
-                field: field.to_string(),
-                value,
-                reason,
-            })?;
+        self.appearance.validate().map_err(sub)?;
         Ok(())
+    }
+
+    /// The main association's gate at the video's frame rate: `max_cost`, or
+    /// [`Config::reference_max_cost`] scaled by `frame_counts_at / frame_rate` when both are
+    /// known, at most `max_cost`.
+    pub fn main_max_cost(&self) -> f64 {
+        match (self.reference_max_cost, self.frame_rate) {
+            (Some(g), Some(fps)) if fps > 0.0 => {
+                (g * self.frame_counts_at / fps).min(self.max_cost)
+            }
+            _ => self.max_cost,
+        }
     }
 
     /// `frames` (a count given at [`Config::frame_counts_at`] fps) at the video's frame rate:
@@ -764,6 +694,32 @@ pub fn check_shape(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_main_gate_scales_with_the_frame_interval() {
+        let at = |fps: Option<f64>| {
+            let c = Config {
+                frame_rate: fps,
+                ..Config::masks()
+            };
+            c.main_max_cost()
+        };
+        let m = Config::masks();
+        assert!((at(Some(30.0)) - 0.54).abs() < 1e-12);
+        assert!((at(Some(25.0)) - 0.648).abs() < 1e-12);
+        assert_eq!(at(Some(5.0)), m.max_cost, "capped at max_cost");
+        assert_eq!(at(None), m.max_cost, "unknown rate: max_cost");
+        let boxes = Config {
+            frame_rate: Some(30.0),
+            ..Config::default()
+        };
+        assert_eq!(boxes.main_max_cost(), boxes.max_cost, "box mode: off");
+        let bad = Config {
+            reference_max_cost: Some(f64::NAN),
+            ..Config::masks()
+        };
+        assert!(bad.validate().is_err());
+    }
 
     #[test]
     fn arrays_are_not_read_into_structs() {

@@ -45,6 +45,7 @@ mod lifecycle;
 pub mod offline;
 pub mod online;
 mod prepare;
+mod presets;
 pub mod regions;
 pub mod scores;
 pub mod sequence;

@@ -293,7 +293,7 @@ impl Tracker {
             }
             if t.config.merge_fragments {
                 let merge = Merge {
-                    max_cost: t.config.max_cost,
+                    max_cost: t.config.main_max_cost(),
                     whole_ratio: t.config.appearance.whole_ratio,
                     extractor: t.extractor.as_ref(),
                 };
