@@ -31,7 +31,7 @@ const MAX_UNION_RATIO: f64 = 1.3;
 /// What the merge reads from the tracker.
 pub(crate) struct Merge<'x> {
     /// A fragment another track could take with a cost up to this is claimed, not merged
-    /// ([`Config::max_cost`](super::Config::max_cost)).
+    /// (the main stage's gate, [`Config::main_max_cost`](super::Config::main_max_cost)).
     pub(crate) max_cost: f64,
     /// Views smaller than this fraction of the reference area are partial
     /// ([`AppearanceConfig::whole_ratio`](super::AppearanceConfig::whole_ratio)).
