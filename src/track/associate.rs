@@ -148,35 +148,16 @@ pub fn stages(config: &Config) -> Vec<Stage> {
     };
     use StageDetections::{High, Low};
     let mut out = Vec::new();
+    let gate = config.main_max_cost();
     if config.lost_reid_only {
-        out.push(main(
-            "confirmed",
-            main_tracks(config),
-            High,
-            config.main_max_cost(),
-        ));
+        out.push(main("confirmed", main_tracks(config), High, gate));
     } else if config.lost_second {
-        out.push(main(
-            "confirmed",
-            StageTracks::Confirmed,
-            High,
-            config.main_max_cost(),
-        ));
-        out.push(main(
-            "lost",
-            StageTracks::Lost,
-            High,
-            config.main_max_cost(),
-        ));
+        out.push(main("confirmed", StageTracks::Confirmed, High, gate));
+        out.push(main("lost", StageTracks::Lost, High, gate));
     } else if config.tentative_first {
-        out.push(main("all", StageTracks::All, High, config.main_max_cost()));
+        out.push(main("all", StageTracks::All, High, gate));
     } else {
-        out.push(main(
-            "active",
-            StageTracks::Active,
-            High,
-            config.main_max_cost(),
-        ));
+        out.push(main("active", StageTracks::Active, High, gate));
     }
     out.push(main(
         "low",

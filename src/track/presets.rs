@@ -37,7 +37,7 @@ impl Config {
     /// - The main gate scales with the frame interval: 0.54 at 30 fps (0.65 at 25 fps), the
     ///   defaults' 0.75 from 22 fps down (`reference_max_cost`). A gate of 0.75 lets a track
     ///   whose ragged 25 fps mask was missed take a split piece or a neighbour (mask cells,
-    ///   mean HOTA 72.41 → 73.20, ragged crossing +3.9 online), while at 5 fps (BDD100K's
+    ///   mean HOTA 72.41 → 73.19, ragged crossing +4.1 online), while at 5 fps (BDD100K's
     ///   masks) true matches cost more and a fixed 0.65 lost 1.9 HOTA.
     pub fn masks() -> Self {
         let base = Self::default();
