@@ -497,8 +497,8 @@ impl Track {
     /// The shape to report for a confirmed track missed for at most `max_frames` frames right
     /// after a whole view (see [`Config::coast_frames`]): its last mask (or box) moved by the
     /// predicted motion and clipped to the frame `size`, marked interpolated. `None` when the
-    /// track does not coast in tracker frame `frame`, or when a box track is predicted mostly
-    /// out of the frame (it has left).
+    /// track does not coast in tracker frame `frame`, or when the track is predicted mostly out
+    /// of the frame (it has left).
     pub(crate) fn coast(
         &mut self,
         frame: u32,
@@ -528,7 +528,13 @@ impl Track {
                 );
                 let mut moved = m.translated(dx, dy);
                 if let Some((w, h)) = size {
+                    let whole = moved.area();
                     moved = moved.clipped(w, h);
+                    // As for boxes: a mask predicted mostly out of view has left, and the
+                    // sliver left at the border would be a false shape.
+                    if (moved.area() as f64) < 0.5 * whole as f64 {
+                        return None;
+                    }
                 }
                 if moved.is_empty() {
                     return None;
