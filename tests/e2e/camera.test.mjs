@@ -2,34 +2,20 @@
 // a canvas, so no file ships with the tests) read frame by frame by seeking, and the webcam
 // (Chromium's fake camera: a moving test pattern).
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, launch, serve, watchErrors } from './harness.mjs';
+import { OUT, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47395;
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch({ args: ['--use-fake-device-for-media-stream', '--use-fake-ui-for-media-stream'] });
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const app = withApp({ port: PORT, args: ['--use-fake-device-for-media-stream', '--use-fake-ui-for-media-stream'] });
 
 test('a video file is read frame by frame and tracked', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0&speed=max`);
+  await page.goto(`${app.server.url}?demo=0&speed=max`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   // Record a WebM: 1.2 s of the empty textured background (the subtractor learns it from the
   // first 20 frames), then 2.5 s of two squares crossing it; open it as a file.
@@ -95,9 +81,9 @@ test('a video file is read frame by frame and tracked', async () => {
 });
 
 test('the webcam is tracked live', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   await page.click('#src-webcam');
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
@@ -112,5 +98,5 @@ test('the webcam is tracked live', async () => {
 });
 
 test('no request left localhost', () => {
-  assert.deepEqual(browser.foreign, []);
+  assert.deepEqual(app.browser.foreign, []);
 });

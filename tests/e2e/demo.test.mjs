@@ -5,34 +5,25 @@
 // expectation computed here, then reloads with the network off and tracks again. The tracking
 // rate is a benchmark, not checked here: `node scripts/bench-browser.mjs`.
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readFileSync } from 'node:fs';
+import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, launch, pageState, serve, untilState, watchErrors } from './harness.mjs';
+import { OUT, pageState, untilState, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47393;
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 /** @type {import('playwright-core').Page} */
 let page;
 /** @type {string[]} */
 let errors;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch();
-  page = await browser.context.newPage();
-  errors = watchErrors(page);
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
+const app = withApp({
+  port: PORT,
+  setup: async (a) => {
+    page = a.keep(await a.browser.context.newPage());
+    errors = watchErrors(page);
+  },
 });
 
 const state = () => pageState(page);
@@ -96,7 +87,7 @@ function motLines(records) {
 }
 
 test('the demo tracks 1280×720 and the page keeps the tracker’s identities', async () => {
-  await page.goto(`${server.url}?speed=max`);
+  await page.goto(`${app.server.url}?speed=max`);
   const s0 = await until((s) => s.processed >= 30);
   assert.deepEqual(s0.size, [1280, 720]);
   assert.equal(s0.source.kind, 'synth');
@@ -209,20 +200,21 @@ test('with the network off the app reloads from the service worker and tracks', 
       await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
     }
   });
-  const served = server.log.length;
-  await browser.context.setOffline(true);
+  await app.server.quiet();
+  const served = app.server.log.length;
+  await app.browser.context.setOffline(true);
   try {
     await page.reload();
     await until((s) => s.processed >= 20, 60_000);
-    assert.equal(server.log.length, served, 'nothing reached the server while offline');
+    assert.equal(app.server.log.length, served, 'nothing reached the server while offline');
     await page.screenshot({ path: join(OUT, 'demo-offline.png') });
   } finally {
-    await browser.context.setOffline(false);
+    await app.browser.context.setOffline(false);
   }
   assert.deepEqual(errors, []);
 });
 
 test('no request left localhost', () => {
-  assert.ok(browser.requests.length > 0);
-  assert.deepEqual(browser.foreign, []);
+  assert.ok(app.browser.requests.length > 0);
+  assert.deepEqual(app.browser.foreign, []);
 });

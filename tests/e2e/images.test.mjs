@@ -3,36 +3,23 @@
 // detected and tracked; stepping back shows the right frame again; the result exports in all
 // four formats and reads back through the core.
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readdirSync, readFileSync } from 'node:fs';
+import { readdirSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, ROOT, launch, serve, watchErrors } from './harness.mjs';
+import { OUT, ROOT, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47394;
 const BAG = join(ROOT, '..', 'shared', 'data', 'vot-bag');
 const FRAMES = 60;
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const app = withApp({ port: PORT });
 
 test('an image sequence is tracked, stepped and exported in every format', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0&speed=max`);
+  await page.goto(`${app.server.url}?demo=0&speed=max`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   const files = readdirSync(BAG)
     .filter((f) => f.endsWith('.jpg'))
@@ -86,9 +73,9 @@ test('an image sequence is tracked, stepped and exported in every format', async
 });
 
 test('offline mode tracks the whole sequence with a progress bar, then the offline pass', async (t) => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0&mode=offline`);
+  await page.goto(`${app.server.url}?demo=0&mode=offline`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   const files = readdirSync(BAG)
     .filter((f) => f.endsWith('.jpg'))
@@ -131,5 +118,5 @@ test('offline mode tracks the whole sequence with a progress bar, then the offli
 });
 
 test('no request left localhost', () => {
-  assert.deepEqual(browser.foreign, []);
+  assert.deepEqual(app.browser.foreign, []);
 });

@@ -3,31 +3,18 @@
 // page's state before the merge. Also: wasm size, and the app shell from the service worker
 // with the network off.
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readFileSync, readdirSync } from 'node:fs';
+import { readFileSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { gzipSync } from 'node:zlib';
-import { DIST, OUT, ROOT, launch, serve, watchErrors } from './harness.mjs';
+import { DIST, OUT, ROOT, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47391;
 const GT = join(ROOT, '..', 'shared', 'data', 'tud-motmetrics-reference');
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const app = withApp({ port: PORT });
 
 /** The first gt file of the TUD reference data (a real MOTChallenge file). */
 function tudGt() {
@@ -106,9 +93,9 @@ async function background(/** @type {import('playwright-core').Page} */ page, /*
 }
 
 test('import, select with the mouse, merge with the keyboard, undo/redo, renumber, export MOT', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   const gt = tudGt();
   await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
@@ -203,9 +190,9 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, renumbe
 });
 
 test('timeline clicks select and seek; split, delete and the help dialog work from the keyboard; the legend', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   const gt = tudGt();
   await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
@@ -299,9 +286,9 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
 });
 
 test('a timeline click past the tracked frames shows the last tracked frame, and the counter says so', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   // The demo scene, a few frames tracked, then back to frame 1.
   await page.click('#src-demo');
@@ -336,9 +323,9 @@ test('a timeline click past the tracked frames shows the last tracked frame, and
 });
 
 test('an import opens on the first frame that has tracks', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   // A real file whose tracks start late: the TUD ground truth moved 40 frames on.
   const gt = tudGt();
@@ -366,9 +353,9 @@ test('an import opens on the first frame that has tracks', async () => {
 });
 
 test('bad files are refused with a message, not a crash', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   await page.setInputFiles('#file-import', { name: 'bad.txt', mimeType: 'text/plain', buffer: Buffer.from('1,1,10,20,30,40\n2,x,1,1,1,1\n') });
   await page.waitForFunction(() => document.getElementById('status')?.classList.contains('error'));
@@ -390,6 +377,6 @@ test('wasm is at most 600 KB gzipped', () => {
 });
 
 test('no request left localhost', () => {
-  assert.ok(browser.requests.length > 0, 'requests were recorded');
-  assert.deepEqual(browser.foreign, []);
+  assert.ok(app.browser.requests.length > 0, 'requests were recorded');
+  assert.deepEqual(app.browser.foreign, []);
 });

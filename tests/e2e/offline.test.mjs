@@ -3,29 +3,16 @@
 // the wasm core. MOTS masks also round-trip byte for byte. The install precaches the app, not the
 // SSD detector's 19 MB (cached on first use instead, see ssd.test.mjs).
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readFileSync, readdirSync, statSync } from 'node:fs';
+import { readFileSync, readdirSync, statSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, launch, serve, watchErrors } from './harness.mjs';
+import { DIST, OUT, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47392;
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const app = withApp({ port: PORT });
 
 /**
  * COCO RLE of a full-image bitmap, compressed as pycocotools' rleToString — written here from
@@ -84,9 +71,9 @@ function motsFile() {
 }
 
 test('after one visit the app loads, imports, draws and exports with the network off', async () => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0`);
+  await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   // The first visit installs the service worker; wait until it controls the page.
   await page.evaluate(async () => {
@@ -95,12 +82,13 @@ test('after one visit the app loads, imports, draws and exports with the network
       await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
     }
   });
-  const served = server.log.length;
-  await browser.context.setOffline(true);
+  await app.server.quiet();
+  const served = app.server.log.length;
+  await app.browser.context.setOffline(true);
   try {
     await page.reload();
     await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
-    assert.equal(server.log.length, served, 'nothing reached the server while offline');
+    assert.equal(app.server.log.length, served, 'nothing reached the server while offline');
 
     const mots = motsFile();
     await page.setInputFiles('#file-import', { name: 'discs.txt', mimeType: 'text/plain', buffer: Buffer.from(mots) });
@@ -129,7 +117,7 @@ test('after one visit the app loads, imports, draws and exports with the network
     assert.equal(readFileSync(await download.path(), 'utf8'), mots, 'MOTS round-trips byte for byte');
     await page.screenshot({ path: join(OUT, 'offline.png') });
   } finally {
-    await browser.context.setOffline(false);
+    await app.browser.context.setOffline(false);
   }
   assert.deepEqual(errors, []);
   await page.close();
@@ -156,5 +144,5 @@ test('the install precaches the app shell and the wasm, not the SSD detector\'s 
 });
 
 test('no request left localhost', () => {
-  assert.deepEqual(browser.foreign, []);
+  assert.deepEqual(app.browser.foreign, []);
 });

@@ -12,30 +12,17 @@
 // pass already re-identifies most of them by colour and SIFT (occlusion seed 0: 11 ids, IDSW 6
 // online, the same offline; `cargo run --release --example demo_presets`).
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readFileSync } from 'node:fs';
+import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, launch, serve, watchErrors } from './harness.mjs';
+import { OUT, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47397;
 const FRAMES = 300;
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const app = withApp({ port: PORT });
 
 /** @typedef {{ frame: number, id: number, bbox: { x: number, y: number, w: number, h: number }, interpolated?: boolean }} Rec */
 
@@ -77,7 +64,7 @@ async function runScene(page, mode) {
       });
     });
   });
-  await page.goto(`${server.url}?scene=occlusion&speed=max&mode=${mode}&preset=default`);
+  await page.goto(`${app.server.url}?scene=occlusion&speed=max&mode=${mode}&preset=default`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   await page.waitForFunction(
     ([n, m]) => {
@@ -140,7 +127,7 @@ function edgeCoverage(page, box) {
 
 test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown and exported', async (t) => {
   // Online first: the same scene, the same detector.
-  const onlinePage = await browser.context.newPage();
+  const onlinePage = await app.browser.context.newPage();
   const onlineErrors = watchErrors(onlinePage);
   await runScene(onlinePage, 'online');
   const online = await records(onlinePage);
@@ -153,7 +140,7 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   assert.deepEqual(onlineErrors, []);
   await onlinePage.close();
 
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
   const t0 = Date.now();
   await runScene(page, 'offline');
@@ -333,5 +320,5 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
 });
 
 test('no request left localhost', () => {
-  assert.deepEqual(browser.foreign, []);
+  assert.deepEqual(app.browser.foreign, []);
 });

@@ -5,32 +5,19 @@
 // The model and runtime are not precached at install: the service worker caches them the first
 // time the detector fetches them, and serves them again with the network off.
 
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, readdirSync, readFileSync } from 'node:fs';
+import { readdirSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, ROOT, launch, serve, watchErrors } from './harness.mjs';
+import { OUT, ROOT, launch, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47396;
 const DAVIS = join(ROOT, '..', 'shared', 'data', 'davis-car-shadow', 'DAVIS');
 const JPEG = join(DAVIS, 'JPEGImages', '480p', 'car-shadow');
 const MASKS = join(DAVIS, 'Annotations', '480p', 'car-shadow');
 
-/** @type {Awaited<ReturnType<typeof serve>>} */
-let server;
-/** @type {Awaited<ReturnType<typeof launch>>} */
-let browser;
 
-before(async () => {
-  mkdirSync(OUT, { recursive: true });
-  server = await serve(DIST, PORT);
-  browser = await launch();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const app = withApp({ port: PORT });
 
 const frames = () =>
   readdirSync(JPEG)
@@ -108,9 +95,9 @@ const median = (xs) => {
 };
 
 test('the SSD detector finds the DAVIS car on most frames and the tracker keeps one id', async (t) => {
-  const page = await browser.context.newPage();
+  const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
-  await page.goto(`${server.url}?demo=0&speed=max`);
+  await page.goto(`${app.server.url}?demo=0&speed=max`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
 
   const options = await page.$$eval('#detector option', (os) => os.map((o) => /** @type {HTMLOptionElement} */ (o).value));
@@ -240,9 +227,9 @@ test('the SSD files are cached on first use, not at install; then the detector w
   try {
     const page = await fresh.context.newPage();
     const errors = watchErrors(page);
-    const start = server.log.length;
-    const log = () => server.log.slice(start);
-    await page.goto(`${server.url}?demo=0&speed=max`);
+    const start = app.server.log.length;
+    const log = () => app.server.log.slice(start);
+    await page.goto(`${app.server.url}?demo=0&speed=max`);
     await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
     await page.evaluate(async () => {
       await navigator.serviceWorker.ready;
@@ -269,7 +256,8 @@ test('the SSD files are cached on first use, not at install; then the detector w
     assert.equal(new Set(fetched).size, fetched.length, `each SSD file fetched once: ${fetched}`);
 
     // With the network off, a reload serves the app and the detector from the caches.
-    const served = server.log.length;
+    await app.server.quiet();
+    const served = app.server.log.length;
     await fresh.context.setOffline(true);
     try {
       await page.reload();
@@ -277,7 +265,7 @@ test('the SSD files are cached on first use, not at install; then the detector w
       const again = await runSsd(page, 8);
       assert.ok(again.detections.every((d) => d >= 1), `detections every frame offline: ${again.detections}`);
       assert.ok(again.car, 'the car is detected offline');
-      assert.equal(server.log.length, served, `nothing reached the server while offline: ${server.log.slice(served)}`);
+      assert.equal(app.server.log.length, served, `nothing reached the server while offline: ${app.server.log.slice(served)}`);
     } finally {
       await fresh.context.setOffline(false);
     }
@@ -290,5 +278,5 @@ test('the SSD files are cached on first use, not at install; then the detector w
 });
 
 test('no request left localhost', () => {
-  assert.deepEqual(browser.foreign, []);
+  assert.deepEqual(app.browser.foreign, []);
 });
