@@ -14,6 +14,8 @@ export const ROOT = resolve(fileURLToPath(new URL('../..', import.meta.url)));
 export const DIST = join(ROOT, 'www', 'dist');
 export const OUT = join(ROOT, 'target', 'e2e');
 export const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
+/** Screenshots that www/README.md shows: `node scripts/doc-shots.mjs` copies them to www/docs. */
+export const SHOTS = join(OUT, 'docs');
 
 const MIME = {
   '.html': 'text/html; charset=utf-8',
@@ -210,4 +212,16 @@ export function withApp({ port, args = [], setup }) {
     await app.server?.close();
   });
   return app;
+}
+
+/**
+ * A screenshot for the docs (JPEG: the committed copies stay small), of the page or of one
+ * element.
+ * @param {import('playwright-core').Page} page
+ * @param {string} name file name without extension
+ * @param {import('playwright-core').Locator} [element]
+ */
+export async function docShot(page, name, element) {
+  mkdirSync(SHOTS, { recursive: true });
+  await (element ?? page).screenshot({ path: join(SHOTS, `${name}.jpg`), type: 'jpeg', quality: 70 });
 }

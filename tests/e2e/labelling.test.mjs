@@ -8,7 +8,7 @@ import assert from 'node:assert/strict';
 import { readFileSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { gzipSync } from 'node:zlib';
-import { DIST, OUT, ROOT, watchErrors, withApp } from './harness.mjs';
+import { DIST, OUT, ROOT, docShot, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47391;
 const GT = join(ROOT, '..', 'shared', 'data', 'tud-motmetrics-reference');
@@ -141,6 +141,7 @@ test('import, select with the mouse, merge with the keyboard, undo/redo, renumbe
   await page.evaluate((f) => /** @type {any} */ (window).__shapetrack.app.seek(f), pick.b.frame);
   await clickOn(page, pick.b, true);
   assert.deepEqual((await state()).selection, { a: pick.a.id, b: pick.b.id });
+  await docShot(page, 'select-two');
   await page.keyboard.press('m');
   const merged = await state();
   assert.ok(!merged.ids.includes(pick.b.id), 'the second track is gone');
@@ -279,6 +280,7 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
     assert.match((await item.textContent()) ?? '', words);
   }
   await page.locator('#help-dialog').screenshot({ path: join(OUT, 'legend.png') });
+  await docShot(page, 'legend', page.locator('#help-dialog'));
   await page.keyboard.press('Escape');
   await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
   assert.deepEqual(errors, []);

@@ -16,7 +16,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { OUT, watchErrors, withApp } from './harness.mjs';
+import { OUT, docShot, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47397;
 const FRAMES = 300;
@@ -263,6 +263,7 @@ test('offline mode re-links the occlusion scene: fewer ids, filled gaps, shown a
   assert.ok(solidCover > 0.95, `solid outline: ${solidCover.toFixed(2)} of its edge painted`);
   t.diagnostic(`outline painted: filled ${dashedCover.toFixed(2)}, detected ${solidCover.toFixed(2)}`);
   await page.screenshot({ path: join(OUT, 'relink.png') });
+  await docShot(page, 'offline-pass');
 
   // The CVAT export carries the interpolated flag (keyframe="0"), and reads back the same.
   await page.selectOption('#export-format', 'cvat');
