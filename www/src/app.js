@@ -391,6 +391,9 @@ export class App {
     }
     // Ingest last: it notifies the views.
     this.model.ingest(res.shapes);
+    for (const n of this.model.takeNotices()) {
+      this.status(`two tracks shown as ${n.id} are both seen in frame ${n.frame}: the second goes on as ${n.fresh}`, true);
+    }
   }
 
   /** Tracks the next frame if it is new, else shows it. */

@@ -211,15 +211,24 @@ test('a tracker id that collides with a labeller id is moved aside', () => {
   assert.equal(m.table.get(4, other)?.bbox.y, 2);
 });
 
-test('renumbering during tracking follows the tracker id, merges of two keep the first', () => {
+test('renumbering during tracking follows the tracker id; merged tracks seen together are kept apart', () => {
   const m = new EditModel();
   m.ingest([rec(1, 1)]);
   m.ingest([rec(2, 2)]);
   m.reassign(1, 9);
   m.merge(9, 2);
+  assert.deepEqual(m.takeNotices(), []);
+  // Both tracker tracks are seen in frame 3: two objects after all. No shape is hidden: the
+  // second continues under a new id, the merge before frame 3 stands, and a notice says so.
   m.ingest([rec(3, 1), rec(3, 2)]);
-  assert.deepEqual(layout(m.table), { 9: [1, 2, 3] });
+  assert.deepEqual(layout(m.table), { 9: [1, 2, 3], 10: [3] });
   assert.equal(m.table.get(3, 9)?.bbox.y, 1);
+  assert.equal(m.table.get(3, 10)?.bbox.y, 2);
+  assert.deepEqual(m.takeNotices(), [{ frame: 3, id: 9, fresh: 10 }]);
+  assert.deepEqual(m.takeNotices(), [], 'a notice is given once');
+  m.ingest([rec(4, 1), rec(4, 2)]);
+  assert.deepEqual(layout(m.table), { 9: [1, 2, 3, 4], 10: [3, 4] });
+  assert.deepEqual(m.takeNotices(), []);
 });
 
 test('replaceAll (an import) starts afresh', () => {

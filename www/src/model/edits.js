@@ -92,6 +92,16 @@ export class EditModel {
     this.redoStack = [];
     /** @type {Set<() => void>} */
     this.listeners = new Set();
+    /**
+     * Tracker tracks that `ingest` had to keep apart (see there), for the app to say so.
+     * @type {Array<{ frame: number, id: number, fresh: number }>}
+     */
+    this.notices = [];
+  }
+
+  /** The notices since the last call (see {@link EditModel#notices}). */
+  takeNotices() {
+    return this.notices.splice(0);
   }
 
   /**
@@ -153,9 +163,19 @@ export class EditModel {
         if (!this.aliases.has(r.id) && this.taken(r.id)) this.aliases.set(r.id, this.nextId++);
       }
       const id = this.resolve(r.id);
-      // Two tracker tracks the labeller declared one object (a merge of fragments) can both
-      // appear in a later frame: the labeller's word holds and the first is kept there.
-      if (id === null || this.table.get(frame, id)) continue;
+      if (id === null) continue;
+      if (this.table.get(frame, id)) {
+        // Two tracker tracks the labeller declared one object (a merge of fragments, a
+        // renumbering onto another's id) are both seen in this frame: they are two objects
+        // after all. Hiding one would lose a label without a word, so this one continues
+        // under a new id from here on (not an edit: the merge before this frame stands), and
+        // the app says so.
+        const fresh = this.nextId++;
+        this.aliases.set(r.id, fresh);
+        this.table.add(withId(r, fresh));
+        this.notices.push({ frame, id, fresh });
+        continue;
+      }
       this.table.add(id === r.id ? r : withId(r, id));
       if (id >= this.nextId) this.nextId = id + 1;
     }
