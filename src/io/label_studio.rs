@@ -35,8 +35,10 @@
 //! frame is flagged by *not being a keyframe*: an interpolated record inside a run of
 //! consecutive frames is left out of `sequence`, and reading the file back marks it
 //! interpolated again (with the linear box Label Studio would show; a filled box that was not
-//! linear comes back straightened). The first and last frame of a run are always keyframes,
-//! and the last one has `enabled: false` so the box ends there (a gap, or the track's end).
+//! linear comes back straightened). The first and last frame of a run are always keyframes
+//! (a filled frame there comes back unflagged: Label Studio has nothing to interpolate it
+//! from), and the last one has `enabled: false` so the box ends there (a gap, or the track's
+//! end). Keyframe `time` is the frame's start, `(frame − 1) / fps`.
 //! Scores, visibility, occlusion and masks are not written (Label Studio's video boxes have
 //! none of them; it has no video masks or polygons).
 //!
