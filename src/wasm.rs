@@ -573,8 +573,8 @@ pub struct SequenceMeta {
 }
 
 /// Parses an annotation or result file. `name` names the file in error messages. `meta`
-/// gives the frame size that Label Studio (percent) and YOLO (fractions) files need, and
-/// class names to read Label Studio labels as; other formats ignore it.
+/// gives the frame size that Label Studio (percent) and YOLO (fractions) files need; other
+/// formats ignore it (their files say the size, or use pixels).
 #[wasm_bindgen(js_name = parseAnnotations)]
 pub fn parse_annotations(
     format: Ts<Format>,
