@@ -16,7 +16,9 @@ use crate::detect::{
 };
 use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Summary};
 use crate::frame::{BBox, Detection, Frame, Mask, Point, TrackState, TrackedShape};
-use crate::io::{coco_video, cvat, motchallenge, Record, RecordFlags, Rle};
+use crate::io::{
+    coco_video, cvat, label_studio, motchallenge, scalabel, yolo, Record, RecordFlags, Rle,
+};
 use crate::synth::{Scene, SynthConfig};
 use crate::track::offline::{
     self, Join, JoinSolver, OfflineConfig, Phase, Progress, SequenceInfo, Snapshots, Trajectory,
@@ -487,7 +489,22 @@ pub enum Format {
     CocoVideo,
     /// CVAT for video 1.1 XML.
     Cvat,
+    /// Scalabel / BDD100K JSON (the first video of the file). Classes are numbered as
+    /// BDD100K's evaluation does (pedestrian 1 … bicycle 8, other names from 9): names survive
+    /// a round trip, class numbers from other formats may not.
+    Scalabel,
+    /// Label Studio video JSON (`videorectangle` regions; boxes in percent of the frame, so
+    /// reading and writing need the frame size; filled frames are the frames between
+    /// keyframes).
+    LabelStudio,
+    /// YOLO-style txt with track ids, one file for the sequence:
+    /// `frame class cx cy w h conf track_id`, normalised by the frame size (reading and
+    /// writing need it); cannot flag filled frames.
+    Yolo,
 }
+
+/// Label Studio seeks by time; its `<Video>` tag assumes 24 fps unless told otherwise.
+const LABEL_STUDIO_FPS: f64 = 24.0;
 
 /// A class and its name (COCO categories, CVAT labels).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
@@ -538,10 +555,10 @@ impl Annotations {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
 #[serde(default, deny_unknown_fields)]
 pub struct SequenceMeta {
-    /// Frame width (COCO and CVAT need it).
+    /// Frame width (COCO, CVAT, Label Studio and YOLO need it).
     #[tsify(optional)]
     pub width: Option<u32>,
-    /// Frame height (COCO and CVAT need it).
+    /// Frame height (COCO, CVAT, Label Studio and YOLO need it).
     #[tsify(optional)]
     pub height: Option<u32>,
     /// Number of frames (default: the last record's frame).
@@ -555,12 +572,15 @@ pub struct SequenceMeta {
     pub labels: Option<Vec<LabelJs>>,
 }
 
-/// Parses an annotation or result file. `name` names the file in error messages.
+/// Parses an annotation or result file. `name` names the file in error messages. `meta`
+/// gives the frame size that Label Studio (percent) and YOLO (fractions) files need; other
+/// formats ignore it (their files say the size, or use pixels).
 #[wasm_bindgen(js_name = parseAnnotations)]
 pub fn parse_annotations(
     format: Ts<Format>,
     #[wasm_bindgen(unchecked_param_type = "string")] text: JsValue,
     #[wasm_bindgen(unchecked_param_type = "string")] name: JsValue,
+    meta: Option<Ts<SequenceMeta>>,
 ) -> Result<Ts<Annotations>, JsValue> {
     // Taken as JS values: a number passed as the text must be an error, not a trap in
     // wasm-bindgen's string conversion.
@@ -573,6 +593,10 @@ pub fn parse_annotations(
         }
     };
     let (text, name) = (text.as_str(), name.as_str());
+    let meta = match meta {
+        Some(m) => settings(m)?,
+        None => SequenceMeta::default(),
+    };
     let out = match rust(format)? {
         Format::Mot => Annotations::plain(&motchallenge::parse_mot(text, name).map_err(js_error)?),
         Format::Mots => {
@@ -636,8 +660,71 @@ pub fn parse_annotations(
                 videos: 1,
             }
         }
+        Format::Scalabel => {
+            let frames = scalabel::parse_scalabel(text, name).map_err(js_error)?;
+            let videos = scalabel::split_videos(frames);
+            let count = videos.len() as u32;
+            let first = videos.into_values().next().unwrap_or_default();
+            let (mut ids, mut cats) = (scalabel::IdMap::default(), scalabel::Categories::default());
+            let records = scalabel::to_records(&first, &mut ids, &mut cats, false);
+            let classes: std::collections::BTreeSet<i32> =
+                records.iter().map(|r| r.class).collect();
+            Annotations {
+                frames: first.iter().map(|f| f.frame_index + 1).max(),
+                labels: classes
+                    .into_iter()
+                    .filter_map(|c| {
+                        cats.name(c).map(|n| LabelJs {
+                            class: c,
+                            name: n.to_string(),
+                        })
+                    })
+                    .collect(),
+                videos: count.max(1),
+                ..Annotations::plain(&records)
+            }
+        }
+        Format::LabelStudio => {
+            let size = frame_size(&meta)?;
+            let a = label_studio::parse_label_studio(text, name, size, None).map_err(js_error)?;
+            Annotations {
+                records: from_core_records(&a.records),
+                width: Some(size.0),
+                height: Some(size.1),
+                frames: (a.frames > 0).then_some(a.frames),
+                labels: a
+                    .labels
+                    .iter()
+                    .enumerate()
+                    .map(|(i, n)| LabelJs {
+                        class: i as i32,
+                        name: n.clone(),
+                    })
+                    .collect(),
+                videos: a.tasks.max(1) as u32,
+            }
+        }
+        Format::Yolo => {
+            let size = frame_size(&meta)?;
+            Annotations {
+                width: Some(size.0),
+                height: Some(size.1),
+                ..Annotations::plain(&yolo::parse_yolo(text, name, size).map_err(js_error)?)
+            }
+        }
     };
     ts(&out)
+}
+
+/// The frame size from `meta`, for formats whose coordinates are relative to it.
+fn frame_size(meta: &SequenceMeta) -> Result<(u32, u32), JsValue> {
+    match (meta.width, meta.height) {
+        (Some(w), Some(h)) if w > 0 && h > 0 => Ok((w, h)),
+        _ => Err(js_error(BindingError::Option {
+            name: "meta",
+            message: "this format needs the frame width and height".to_string(),
+        })),
+    }
 }
 
 /// Class names for every class the records use: the given ones, else "object" for -1 and
@@ -657,7 +744,7 @@ fn label_map(records: &[Record], given: &[LabelJs]) -> BTreeMap<i32, String> {
 }
 
 /// Writes records in `format`. MOTS skips records without a mask, as the format requires;
-/// COCO-video and CVAT need the frame size in `meta`.
+/// COCO-video, CVAT, Label Studio and YOLO need the frame size in `meta`.
 #[wasm_bindgen(js_name = writeAnnotations)]
 pub fn write_annotations(
     format: Ts<Format>,
@@ -672,15 +759,7 @@ pub fn write_annotations(
     let frames = meta
         .frames
         .unwrap_or_else(|| records.iter().map(|r| r.frame).max().unwrap_or(0));
-    let size = || -> Result<(u32, u32), JsValue> {
-        match (meta.width, meta.height) {
-            (Some(w), Some(h)) if w > 0 && h > 0 => Ok((w, h)),
-            _ => Err(js_error(BindingError::Option {
-                name: "meta",
-                message: "this format needs the frame width and height".to_string(),
-            })),
-        }
-    };
+    let size = || frame_size(&meta);
     let labels = label_map(&records, meta.labels.as_deref().unwrap_or(&[]));
     match rust(format)? {
         Format::Mot => Ok(motchallenge::write_mot(&records)),
@@ -716,6 +795,48 @@ pub fn write_annotations(
             };
             cvat::write_cvat(&records, &meta, &labels).map_err(js_error)
         }
+        Format::Scalabel => {
+            let video = meta
+                .name
+                .clone()
+                .unwrap_or_else(|| "shapetrack".to_string());
+            let mut frames = scalabel::from_records(
+                &records,
+                &video,
+                frames,
+                None,
+                &scalabel::Categories::default(),
+            );
+            // Categories by the app's names (BDD100K's numbering would rename other classes).
+            let class_of: BTreeMap<(u32, String), i32> = records
+                .iter()
+                .map(|r| ((r.frame, r.id.to_string()), r.class))
+                .collect();
+            for f in &mut frames {
+                for l in &mut f.labels {
+                    let class = class_of.get(&(f.frame_index + 1, l.id.clone()));
+                    l.category = class
+                        .filter(|c| **c != -1)
+                        .and_then(|c| labels.get(c).cloned());
+                }
+            }
+            scalabel::write_scalabel(&frames).map_err(js_error)
+        }
+        Format::LabelStudio => {
+            let (width, height) = size()?;
+            let meta = label_studio::LabelStudioMeta {
+                video: meta
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| "shapetrack".to_string()),
+                width,
+                height,
+                frames,
+                fps: LABEL_STUDIO_FPS,
+            };
+            label_studio::write_label_studio(&records, &meta, &labels).map_err(js_error)
+        }
+        Format::Yolo => yolo::write_yolo(&records, size()?).map_err(js_error),
     }
 }
 

@@ -25,7 +25,7 @@ use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mots, SeqInfo};
 use shapetrack::io::png_masks::{decode_png_masks, encode_png_masks, EightBit};
 use shapetrack::io::scalabel::parse_scalabel;
 use shapetrack::io::vot::{parse_anchor_values, parse_regions};
-use shapetrack::io::{Record, Rle};
+use shapetrack::io::{label_studio, yolo, Record, Rle};
 use shapetrack::track::offline::OfflineConfig;
 use shapetrack::track::Config;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -196,6 +196,39 @@ fn targets() -> Vec<Target> {
             serde_json::to_vec(&seg_first).unwrap(),
         ]
     };
+    // Label Studio and YOLO: the writers' output for a few tracks with gaps and filled frames,
+    // and a hand-written export with sparse keyframes, a rotation and a labels result.
+    let boxes: Vec<Record> = small_mask_records()
+        .into_iter()
+        .map(|mut r| {
+            r.mask = None;
+            r.bbox = shapetrack::BBox::new(3.0 * r.id as f64, 4.0, 7.0, 8.0 + r.frame as f64);
+            r.class = 0;
+            r.flags.interpolated = r.frame == 2;
+            r
+        })
+        .collect();
+    let frames = boxes.iter().map(|r| r.frame).max().unwrap_or(1);
+    let label_studio = vec![
+        label_studio::write_label_studio(
+            &boxes,
+            &label_studio::LabelStudioMeta {
+                video: "v.mp4".into(),
+                width: 32,
+                height: 24,
+                frames,
+                fps: 24.0,
+            },
+            &[(0, "car".to_string())].into_iter().collect(),
+        )
+        .unwrap()
+        .into_bytes(),
+        br#"[{"data":{"video":"v"},"annotations":[{"result":[{"id":"q1","type":"videorectangle","value":{"framesCount":9,"labels":["a"],"sequence":[{"frame":1,"enabled":true,"x":10,"y":10,"width":20,"height":20,"rotation":30},{"frame":4,"enabled":false,"x":20,"y":10,"width":20,"height":20}]}},{"id":"q1","type":"labels","value":{"labels":["b"]}}]}]}]"#.to_vec(),
+    ];
+    let yolo_seeds = vec![
+        yolo::write_yolo(&boxes, (32, 24)).unwrap().into_bytes(),
+        b"0 0.5 0.5 0.25 0.5 7\n2 0.25 0.25 0.1 0.1 0.66 8\n1 0.5 0.5 1 1\n".to_vec(),
+    ];
     let vot = vec![
         {
             let mut v = head("../shared/data/vot-bag/groundtruth.txt", 20);
@@ -253,6 +286,27 @@ fn targets() -> Vec<Target> {
             name: "scalabel",
             seeds: scalabel,
             run: |b| drop(parse_scalabel(&text(b), "f")),
+        },
+        Target {
+            name: "label-studio",
+            seeds: label_studio,
+            run: |b| {
+                drop(label_studio::parse_label_studio(
+                    &text(b),
+                    "f",
+                    (32, 24),
+                    None,
+                ))
+            },
+        },
+        Target {
+            name: "yolo",
+            seeds: yolo_seeds,
+            run: |b| {
+                let t = text(b);
+                let _ = yolo::parse_yolo(&t, "f", (32, 24));
+                let _ = yolo::parse_yolo_frame(&t, "f", 3, (32, 24));
+            },
         },
         Target {
             name: "vot",

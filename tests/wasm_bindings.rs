@@ -40,6 +40,7 @@ fn parse(format: &str, text: &str, name: &str) -> Result<Vec<RecordJs>, JsValue>
         ts(JsValue::from_str(format)),
         JsValue::from_str(text),
         JsValue::from_str(name),
+        None,
     )?;
     let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
     Ok(serde_json::from_value(v["records"].clone()).unwrap())
@@ -226,6 +227,7 @@ fn coco_video_and_cvat_round_trip_through_the_core() {
             ts(JsValue::from_str(format)),
             JsValue::from_str(&text),
             JsValue::from_str("x"),
+            None,
         )
         .unwrap();
         let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
@@ -257,6 +259,78 @@ fn coco_video_and_cvat_round_trip_through_the_core() {
     // Without the frame size these formats cannot be written.
     let msg = error_message(write("cvat", &recs, None).err().unwrap());
     assert!(msg.contains("width and height"), "{msg}");
+}
+
+#[wasm_bindgen_test]
+fn scalabel_label_studio_and_yolo_round_trip_through_the_core() {
+    // Two tracks over 4 frames: a gap for id 2, a filled frame for id 1.
+    let mut recs: Vec<RecordJs> = Vec::new();
+    for (frame, id, x, filled) in [
+        (1, 1, 0.0, false),
+        (2, 1, 4.0, true),
+        (3, 1, 8.0, false),
+        (1, 2, 40.0, false),
+        (3, 2, 44.0, false),
+        (4, 2, 48.0, false),
+    ] {
+        let row = serde_json::json!({
+            "frame": frame, "id": id, "score": 1.0, "class": 1, "visibility": -1.0,
+            "interpolated": filled, "occluded": false,
+            "bbox": { "x": x, "y": 10, "w": 16, "h": 20 },
+        });
+        recs.push(serde_json::from_value(row).unwrap());
+    }
+    recs.sort_by_key(|r| (r.frame, r.id));
+    let meta = serde_json::json!({ "width": 160, "height": 120, "frames": 4, "name": "t",
+        "labels": [{ "class": 1, "name": "car" }] });
+    for format in ["scalabel", "label-studio", "yolo"] {
+        let text = write(format, &recs, Some(meta.clone())).unwrap();
+        let a = parse_annotations(
+            ts(JsValue::from_str(format)),
+            JsValue::from_str(&text),
+            JsValue::from_str("x"),
+            Some(ts(js(&serde_json::json!({ "width": 160, "height": 120 })))),
+        )
+        .unwrap();
+        let v: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(a)).unwrap();
+        let back: Vec<RecordJs> = serde_json::from_value(v["records"].clone()).unwrap();
+        assert_eq!(back.len(), recs.len(), "{format}: {text}");
+        for (a, b) in recs.iter().zip(&back) {
+            assert_eq!((a.frame, a.id), (b.frame, b.id), "{format}");
+            for (p, q) in [
+                (a.bbox.x, b.bbox.x),
+                (a.bbox.y, b.bbox.y),
+                (a.bbox.w, b.bbox.w),
+                (a.bbox.h, b.bbox.h),
+            ] {
+                assert!((p - q).abs() < 1e-9, "{format}: {a:?} vs {b:?}");
+            }
+            // YOLO cannot say a frame was filled; the other two can.
+            if format != "yolo" {
+                assert_eq!(
+                    a.interpolated, b.interpolated,
+                    "{format}: frame {}",
+                    a.frame
+                );
+            }
+        }
+        if format != "yolo" {
+            assert!(
+                v["labels"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .any(|l| l["name"] == "car"),
+                "{format}: {v}"
+            );
+        }
+    }
+    // Label Studio and YOLO boxes are relative to the frame: reading needs its size.
+    for format in ["label-studio", "yolo"] {
+        let text = write(format, &recs, Some(meta.clone())).unwrap();
+        let msg = error_message(parse(format, &text, "x").err().unwrap());
+        assert!(msg.contains("width and height"), "{format}: {msg}");
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -126,14 +126,26 @@ fn mutated_annotation_text_never_traps() {
             "coco-video",
             r#"{"videos":[{"id":1,"width":8,"height":6,"length":2}],"annotations":[{"id":1,"video_id":1,"category_id":1,"bboxes":[[1,1,3,3],null],"areas":[9,null],"segmentations":[null,null]}],"categories":[{"id":1,"name":"a"}]}"#,
         ),
+        (
+            "scalabel",
+            r#"[{"name":"a-1.jpg","videoName":"a","frameIndex":0,"labels":[{"id":"1","category":"car","box2d":{"x1":1,"y1":1,"x2":4,"y2":4}}]}]"#,
+        ),
+        (
+            "label-studio",
+            r#"[{"data":{"video":"v"},"annotations":[{"result":[{"id":"1","type":"videorectangle","value":{"framesCount":3,"labels":["a"],"sequence":[{"frame":1,"enabled":true,"x":10,"y":10,"width":20,"height":20},{"frame":3,"enabled":false,"x":20,"y":10,"width":20,"height":20}]}}]}]}]"#,
+        ),
+        ("yolo", "1 0 0.5 0.5 0.25 0.5 0.9 7\n2 0 0.5 0.5 0.25 0.5 0.9 7\n"),
     ];
     for k in 0..ITERS {
         let (format, seed) = seeds[k % seeds.len()];
         let text = mutate(&mut rng, seed);
+        // The frame size Label Studio and YOLO need (the others ignore it).
+        let meta = json(r#"{"width": 8, "height": 6}"#).map(ts);
         let _ = parse_annotations(
             ts(JsValue::from_str(format)),
             JsValue::from_str(&text),
             JsValue::from_str("f"),
+            meta,
         );
     }
 }

@@ -1,6 +1,6 @@
 //! File formats in and out: MOTChallenge txt, MOTS txt (COCO RLE), 16-bit PNG instance masks,
 //! COCO-video / YouTube-VIS JSON, CVAT-for-video XML, VOT `groundtruth.txt`, Scalabel JSON
-//! (BDD100K).
+//! (BDD100K), Label Studio video JSON, YOLO-style txt with track ids.
 //!
 //! Every reader turns text into [`Record`]s (one object in one frame) and reports problems as an
 //! [`IoError`] naming the file, the line (1-based), the column (1-based field or character) and
@@ -9,6 +9,7 @@
 
 pub mod coco_video;
 pub mod cvat;
+pub mod label_studio;
 pub mod layout;
 pub mod limits;
 pub mod motchallenge;
@@ -16,6 +17,7 @@ pub mod png_masks;
 pub mod rle;
 pub mod scalabel;
 pub mod vot;
+pub mod yolo;
 
 use crate::frame::{BBox, Mask, TrackedShape};
 pub use rle::{Rle, RleError};

@@ -45,6 +45,10 @@ export async function usage(): Promise<string> {
   const id: number = first?.id ?? -1;
   const mask: RleJs | undefined = first?.mask;
   const text: string = writeAnnotations('cvat', recs, { width: 640, height: 480, labels: [{ class: -1, name: 'object' }] });
+  // Formats with frame-relative boxes take the frame size when reading.
+  const yolo: Annotations = parseAnnotations('yolo', text, 'x.txt', { width: 640, height: 480 });
+  const studio: Format = 'label-studio';
+  const scalabel: Format = 'scalabel';
 
   const rle: RleJs = encodeMask(4, 4, new Uint8Array(16));
   const bm: MaskBitmap = decodeMask(rle);
