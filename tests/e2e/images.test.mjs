@@ -104,7 +104,8 @@ test('offline mode tracks the whole sequence with a progress bar, then the offli
     .map((f) => join(BAG, f));
   await page.setInputFiles('#file-images', files);
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
-  assert.ok(await page.locator('#play .run').isVisible(), 'the play button says "Run"');
+  // The button shows "Run" once the first frame is in (the next render): wait for it.
+  await page.locator('#play .run').waitFor({ state: 'visible', timeout: 30_000 });
   await page.click('#play');
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().finished, undefined, { timeout: 60_000 });
   const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
