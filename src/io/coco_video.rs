@@ -15,7 +15,7 @@
 //! into borrowed raw values, whose byte offsets in the text give exact positions even for
 //! errors found after parsing (an unknown `video_id`, an RLE that does not fit the video).
 
-use super::{line_col, IoError, Record, RecordFlags, Rle};
+use super::{json_err, line_col, serde_message, IoError, Record, RecordFlags, Rle};
 use crate::frame::BBox;
 use serde::{Deserialize, Serialize};
 use serde_json::value::RawValue;
@@ -243,28 +243,9 @@ impl<'t> Ctx<'t> {
                 file: self.file.to_string(),
                 line,
                 column,
-                message: e
-                    .to_string()
-                    .split(" at line ")
-                    .next()
-                    .unwrap_or("")
-                    .to_string(),
+                message: serde_message(&e),
             }
         })
-    }
-}
-
-fn json_err(file: &str, e: serde_json::Error) -> IoError {
-    IoError::Json {
-        file: file.to_string(),
-        line: e.line().max(1),
-        column: e.column().max(1),
-        message: e
-            .to_string()
-            .split(" at line ")
-            .next()
-            .unwrap_or("")
-            .to_string(),
     }
 }
 

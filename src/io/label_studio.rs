@@ -54,7 +54,7 @@ use serde_json::value::RawValue;
 use serde_json::{json, Value};
 
 use super::limits::{image_size_ok, MAX_FRAME, MAX_RECORDS};
-use super::{line_col, IoError, Record, RecordFlags};
+use super::{json_err, IoError, JsonCtx as Ctx, Record, RecordFlags};
 use crate::frame::BBox;
 
 /// What a Label Studio file says besides its records.
@@ -85,60 +85,6 @@ pub struct LabelStudioMeta {
     pub frames: u32,
     /// Frame rate, for `duration` and keyframe `time` (Label Studio seeks by time).
     pub fps: f64,
-}
-
-struct Ctx<'t> {
-    file: &'t str,
-    text: &'t str,
-}
-
-impl Ctx<'_> {
-    fn err_at(&self, raw: &RawValue, message: impl Into<String>) -> IoError {
-        let offset = (raw.get().as_ptr() as usize).wrapping_sub(self.text.as_ptr() as usize);
-        let (line, column) = line_col(self.text, offset);
-        IoError::Json {
-            file: self.file.to_string(),
-            line,
-            column,
-            message: message.into(),
-        }
-    }
-
-    fn object<'a>(
-        &self,
-        raw: &'a RawValue,
-        what: &str,
-    ) -> Result<BTreeMap<String, &'a RawValue>, IoError> {
-        serde_json::from_str(raw.get())
-            .map_err(|_| self.err_at(raw, format!("{what} is not an object")))
-    }
-
-    fn list<'a>(&self, raw: &'a RawValue, what: &str) -> Result<Vec<&'a RawValue>, IoError> {
-        serde_json::from_str(raw.get())
-            .map_err(|_| self.err_at(raw, format!("{what} is not a list")))
-    }
-
-    /// A finite number (JSON has no NaN, but `1e999` parses as infinity).
-    fn number(&self, raw: &RawValue, what: &str) -> Result<f64, IoError> {
-        serde_json::from_str::<f64>(raw.get())
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| self.err_at(raw, format!("{what} must be a finite number")))
-    }
-}
-
-fn json_err(file: &str, e: serde_json::Error) -> IoError {
-    IoError::Json {
-        file: file.to_string(),
-        line: e.line().max(1),
-        column: e.column().max(1),
-        message: e
-            .to_string()
-            .split(" at line ")
-            .next()
-            .unwrap_or("")
-            .to_string(),
-    }
 }
 
 fn size_err(file: &str, size: (u32, u32)) -> IoError {

@@ -22,6 +22,8 @@ pub mod yolo;
 use crate::frame::{BBox, Mask, TrackedShape};
 pub use rle::{Rle, RleError};
 use serde::{Deserialize, Serialize};
+use serde_json::value::RawValue;
+use std::collections::BTreeMap;
 use thiserror::Error;
 
 /// Errors reading or writing annotation and result files.
@@ -148,6 +150,72 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |i| i + 1);
     (line, before[line_start..].chars().count() + 1)
+}
+
+/// A JSON syntax error of `file` at serde's position, its message without serde's own
+/// "at line … column …" (the error carries them).
+pub(crate) fn json_err(file: &str, e: serde_json::Error) -> IoError {
+    IoError::Json {
+        file: file.to_string(),
+        line: e.line().max(1),
+        column: e.column().max(1),
+        message: serde_message(&e),
+    }
+}
+
+/// serde's message without its own "at line … column …" (the error carries the position).
+pub(crate) fn serde_message(e: &serde_json::Error) -> String {
+    let text = e.to_string();
+    text.split(" at line ").next().unwrap_or("").to_string()
+}
+
+/// A JSON document being read, for error positions: raw values borrowed from `text` tell
+/// where they are in it.
+pub(crate) struct JsonCtx<'t> {
+    pub(crate) file: &'t str,
+    pub(crate) text: &'t str,
+}
+
+impl JsonCtx<'_> {
+    /// An error at `raw`'s position.
+    pub(crate) fn err_at(&self, raw: &RawValue, message: impl Into<String>) -> IoError {
+        let offset = (raw.get().as_ptr() as usize).wrapping_sub(self.text.as_ptr() as usize);
+        let (line, column) = line_col(self.text, offset);
+        IoError::Json {
+            file: self.file.to_string(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
+    /// `raw` as an object (an error naming `what` otherwise).
+    pub(crate) fn object<'a>(
+        &self,
+        raw: &'a RawValue,
+        what: &str,
+    ) -> Result<BTreeMap<String, &'a RawValue>, IoError> {
+        serde_json::from_str(raw.get())
+            .map_err(|_| self.err_at(raw, format!("{what} is not an object")))
+    }
+
+    /// `raw` as a list (an error naming `what` otherwise).
+    pub(crate) fn list<'a>(
+        &self,
+        raw: &'a RawValue,
+        what: &str,
+    ) -> Result<Vec<&'a RawValue>, IoError> {
+        serde_json::from_str(raw.get())
+            .map_err(|_| self.err_at(raw, format!("{what} is not a list")))
+    }
+
+    /// A finite number (JSON has no NaN, but `1e999` parses as infinity).
+    pub(crate) fn number(&self, raw: &RawValue, what: &str) -> Result<f64, IoError> {
+        serde_json::from_str::<f64>(raw.get())
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| self.err_at(raw, format!("{what} must be a finite number")))
+    }
 }
 
 /// The image files (`.jpg`, `.jpeg`, `.png`) of a frame folder in natural order (`2.png`

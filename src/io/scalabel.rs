@@ -27,7 +27,7 @@ use std::collections::BTreeMap;
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
 
-use super::{line_col, IoError, Record, RecordFlags, Rle};
+use super::{json_err, line_col, IoError, JsonCtx as Ctx, Record, RecordFlags, Rle};
 use crate::frame::BBox;
 
 /// BDD100K's MOT categories, numbered from 1 as its evaluation does.
@@ -156,39 +156,6 @@ impl Categories {
             .ok()
             .and_then(|k| self.names.get(k))
             .map(String::as_str)
-    }
-}
-
-/// Where raw JSON values live in the source text, for error positions.
-struct Ctx<'t> {
-    file: &'t str,
-    text: &'t str,
-}
-
-impl Ctx<'_> {
-    fn err_at(&self, raw: &RawValue, message: impl Into<String>) -> IoError {
-        let offset = (raw.get().as_ptr() as usize).wrapping_sub(self.text.as_ptr() as usize);
-        let (line, column) = line_col(self.text, offset);
-        IoError::Json {
-            file: self.file.to_string(),
-            line,
-            column,
-            message: message.into(),
-        }
-    }
-}
-
-fn json_err(file: &str, e: serde_json::Error) -> IoError {
-    IoError::Json {
-        file: file.to_string(),
-        line: e.line().max(1),
-        column: e.column().max(1),
-        message: e
-            .to_string()
-            .split(" at line ")
-            .next()
-            .unwrap_or("")
-            .to_string(),
     }
 }
 

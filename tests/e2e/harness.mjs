@@ -69,12 +69,6 @@ export async function serve(dir, port) {
     url: `http://127.0.0.1:${port}/`,
     log,
     /**
-     * Resolves once no request has arrived for `ms` milliseconds: a count of requests taken
-     * while the first visit's last fetches are still on their way would be off by one (the
-     * flaky "36 !== 35" of the offline tests). A settling wait, not a timed assertion.
-     * @param {number} [ms]
-     */
-    /**
      * The requests since the `from`-th that the app made: the service worker's script is left
      * out. On every navigation the browser itself checks `sw.js` for an update, and Chromium's
      * offline emulation does not cover that check (a really offline browser's check fails,
@@ -85,6 +79,12 @@ export async function serve(dir, port) {
     appRequests(from) {
       return log.slice(from).filter((p) => p !== '/sw.js');
     },
+    /**
+     * Resolves once no request has arrived for `ms` milliseconds: a count of requests taken
+     * while the first visit's last fetches are still on their way would be off by one (the
+     * flaky "36 !== 35" of the offline tests). A settling wait, not a timed assertion.
+     * @param {number} [ms]
+     */
     async quiet(ms = 500) {
       while (Date.now() - last < ms) await new Promise((r) => setTimeout(r, 50));
     },

@@ -598,12 +598,13 @@ export class App {
    */
   parse(name, text) {
     const format = guessFormat(name, text);
+    const info = formatInfo(format);
     // Label Studio (percent) and YOLO (fractions) boxes are relative to the frame: they need
     // the open video's size, and a blank canvas has none to offer.
-    if (formatInfo(format).needsSize && !this.source) {
-      throw new Error(`${name}: ${formatInfo(format).label} boxes are relative to the frame size; open the video first`);
+    if (info.needsSize && !this.source) {
+      throw new Error(`${name}: ${info.label} boxes are relative to the frame size; open the video first`);
     }
-    const meta = formatInfo(format).needsSize ? { width: this.stage.width, height: this.stage.height } : undefined;
+    const meta = info.needsSize ? { width: this.stage.width, height: this.stage.height } : undefined;
     const a = this.core.parseAnnotations(format, text, name, meta);
     if (a.videos > 1) this.status(`${name} holds ${a.videos} videos: reading the first`);
     if (a.labels.length) this.labels = a.labels;
