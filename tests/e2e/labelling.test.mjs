@@ -210,17 +210,13 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
     }
     return best;
   });
-  const geo = await page.evaluate((id) => {
-    const tl = /** @type {any} */ (window).__shapetrack.app.timeline;
-    const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
-    const r = c.getBoundingClientRect();
-    const row = tl.ids.indexOf(id) - tl.scroll;
-    const k = r.height / c.height;
-    return { left: r.left, top: r.top, width: r.width, rowY: (2 + (row + 0.5) * tl.rowH) * k, gutter: 34 * (r.width / c.width), frames: tl.frames };
-  }, target.id);
   const frame = Math.round((target.span[0] + target.span[1]) / 2);
-  const x = geo.left + geo.gutter + ((frame - 0.5) / geo.frames) * (geo.width - geo.gutter);
-  await page.mouse.click(x, geo.top + geo.rowY);
+  const cell = await page.evaluate(
+    ([id, f]) => /** @type {any} */ (window).__shapetrack.app.timeline.cellAt(id, f),
+    [target.id, frame],
+  );
+  assert.ok(cell, 'the track and frame are in view on the timeline');
+  await page.mouse.click(cell.x, cell.y);
   await page.waitForFunction((f) => /** @type {any} */ (window).__shapetrack.state().frame === f, frame);
   let st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   assert.deepEqual(st.selection, { a: target.id, b: null });

@@ -86,15 +86,16 @@ function timelineRow(page, id, a, b) {
       const tl = /** @type {any} */ (window).__shapetrack.app.timeline;
       const c = /** @type {HTMLCanvasElement} */ (document.getElementById('timeline'));
       const ctx = /** @type {CanvasRenderingContext2D} */ (c.getContext('2d'));
-      const row = tl.ids.indexOf(id) - tl.scroll;
-      const gutter = 34;
-      const w = c.width - gutter;
-      const x0 = Math.ceil(gutter + ((a - 1) / tl.frames) * w) + 1;
-      const x1 = Math.floor(gutter + (b / tl.frames) * w) - 1;
+      const first = tl.cellAt(id, a);
+      const lastCell = tl.cellAt(id, b);
+      if (!first || !lastCell) return { row: -1, rowH: tl.rowH, pixels: [] };
+      const row = tl.ids.indexOf(id) - tl.view.top;
+      const x0 = Math.ceil(first.canvas.x0) + 1;
+      const x1 = Math.floor(lastCell.canvas.x1) - 1;
       // Two rows inside the bar, so a diagonal stripe is crossed whatever its phase.
       const out = [];
       for (const dy of [0.35, 0.65]) {
-        const y = Math.floor(2 + (row + dy) * tl.rowH);
+        const y = Math.floor(first.canvas.y0 + dy * first.canvas.h);
         const d = ctx.getImageData(x0, y, Math.max(1, x1 - x0), 1).data;
         for (let i = 0; i < d.length; i += 4) out.push(`${d[i]},${d[i + 1]},${d[i + 2]}`);
       }

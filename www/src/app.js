@@ -108,7 +108,13 @@ export class App {
     this.timeline = new Timeline(byId('timeline', HTMLCanvasElement), ({ id, frame, add }) => {
       if (id !== null) this.select(id, add);
       void this.seek(frame);
-    }, colour);
+    }, colour, {
+      zoomIn: byId('tl-zoom-in'),
+      zoomOut: byId('tl-zoom-out'),
+      all: byId('tl-all'),
+      rows: byId('tl-rows'),
+      range: byId('tl-range'),
+    });
     this.panel = new Panel({
       onSelect: (id, add) => this.select(id, add),
       onAction: (a) => this.action(a),

@@ -11,6 +11,11 @@ import { colorOf } from '../lib/colors.js';
  */
 
 
+/** Height of a track-list row in CSS px (`.track-list li` in style.css sets the same). */
+const LIST_ROW = 20;
+/** Rows drawn above and below the ones in view, so a fast scroll shows no gap. */
+const LIST_MARGIN = 10;
+
 export class Panel {
   /**
    * @param {{
@@ -58,6 +63,7 @@ export class Panel {
       if (li) handlers.onSelect(Number(li.dataset.id), e.shiftKey);
     });
     this.listKey = '';
+    this.list.addEventListener('scroll', () => this.renderListWindow(), { passive: true });
   }
 
   /** @param {HTMLElement} chip @param {number} id */
@@ -123,29 +129,71 @@ export class Panel {
   /** When the track list was last rebuilt. */
   listAt = 0;
 
-  /** @param {TrackTable} table @param {Selection} selection */
+  /** @type {number[]} the ids the list shows, ascending */
+  listIds = [];
+
+  /** @type {TrackTable | null} */
+  listTable = null;
+
+  /** @type {Selection} */
+  listSel = { a: null, b: null };
+
+  /** The rows drawn last (first row, count): scrolling within them redraws nothing. */
+  listWindow = '';
+
+  /**
+   * The track list is virtualised: it holds one element per row in view (plus a margin) and
+   * two spacers standing in for the rest, so a thousand tracks cost what twenty do.
+   * @param {TrackTable} table
+   * @param {Selection} selection
+   */
   renderList(table, selection) {
     const key = `${table.version}:${selection.a}:${selection.b}`;
     if (key === this.listKey) return;
+    const newSel = selection.a !== this.listSel.a;
     this.listKey = key;
     this.listAt = performance.now();
-    const ids = table.ids();
-    this.count.textContent = String(ids.length);
-    // A long list only costs DOM nodes; cap it and say so rather than freeze on a huge import.
-    const cap = 1000;
-    const items = ids.slice(0, cap).map((id) => {
+    this.listIds = table.ids();
+    this.listTable = table;
+    this.listSel = { ...selection };
+    this.count.textContent = String(this.listIds.length);
+    if (newSel && selection.a !== null) {
+      // A track selected elsewhere (stage, timeline) is scrolled into view once.
+      const i = this.listIds.indexOf(selection.a);
+      const top = i * LIST_ROW;
+      const el = this.list;
+      if (i >= 0 && (top < el.scrollTop || top + LIST_ROW > el.scrollTop + el.clientHeight)) {
+        el.scrollTop = Math.max(0, top - el.clientHeight / 2);
+      }
+    }
+    this.listWindow = '';
+    this.renderListWindow();
+  }
+
+  /** Draws the rows in view (called on scroll too). */
+  renderListWindow() {
+    const table = this.listTable;
+    if (!table) return;
+    const ids = this.listIds;
+    const el = this.list;
+    const first = Math.max(0, Math.floor(el.scrollTop / LIST_ROW) - LIST_MARGIN);
+    const count = Math.ceil((el.clientHeight || 400) / LIST_ROW) + 2 * LIST_MARGIN;
+    const last = Math.min(ids.length, first + count);
+    const win = `${first}:${last}`;
+    if (win === this.listWindow) return;
+    this.listWindow = win;
+    const { a, b } = this.listSel;
+    const spacer = (/** @type {number} */ rows) => h('li', { class: 'spacer', 'aria-hidden': 'true', style: `height:${rows * LIST_ROW}px` });
+    const items = ids.slice(first, last).map((id) => {
       const span = table.span(id);
-      const li = h('li', { 'data-id': String(id), class: id === selection.a || id === selection.b ? 'sel' : '' }, [
+      return h('li', { 'data-id': String(id), class: id === a || id === b ? 'sel' : '' }, [
         h('span', { class: 'sw', style: `background:${this.colour(id).css}` }),
         h('span', {}, [String(id)]),
         h('span', { class: 'span' }, [span ? `${span[0]}–${span[1]}` : '']),
       ]);
-      return li;
     });
-    if (ids.length > cap) items.push(h('li', {}, [`… ${ids.length - cap} more`]));
-    this.list.replaceChildren(...items);
-    const sel = this.list.querySelector('li.sel');
-    if (sel) sel.scrollIntoView({ block: 'nearest' });
+    // Replacing the children keeps the scroll position: the spacers keep the list's height.
+    this.list.replaceChildren(spacer(first), ...items, spacer(ids.length - last));
   }
 
   /**
