@@ -3,6 +3,9 @@
 // every change goes through a method here and ends in `render()`.
 
 import { EditModel, EditError } from './model/edits.js';
+import { runCommand, renumber, validSelection } from './model/commands.js';
+import { Session } from './model/session.js';
+import { Scorer, scoreInputs } from './model/scoring.js';
 import { TrackTable } from './model/tracks.js';
 import { Stage } from './view/stage.js';
 import { Timeline } from './view/timeline.js';
@@ -36,8 +39,6 @@ const PHASES = /** @type {const} */ ({
   matching: 'choosing joins',
   filling: 'filling gaps',
 });
-/** Recompute scores at most this often (ms) while tracking. */
-const SCORE_MS = 500;
 
 export class App {
   /** @param {Core} core the page's wasm instance (formats, masks, metrics) */
@@ -50,12 +51,9 @@ export class App {
     this.gtName = '';
     /** @type {AnySource | null} */
     this.source = null;
-    /** Whether the open source is being tracked (false: only viewing imported tracks). */
-    this.tracking = false;
-    this.frames = 0;
+    /** The session's phase (idle → tracking → finishing → finished), frames and progress. */
+    this.session = new Session();
     this.cur = 0;
-    this.processed = 0;
-    this.finished = false;
     this.playing = false;
     /** @type {Promise<void> | null} */
     this.loop = null;
@@ -72,15 +70,6 @@ export class App {
      * @type {import('../pkg/shapetrack.js').TrackerConfig | null}
      */
     this.tracker = null;
-    /** Whether the open session can run the offline pass (a source with an end). */
-    this.offlineCapable = false;
-    /**
-     * What the last offline pass did: ids before and after, joins, filled-in records, time; and
-     * how many records the online pass had already flagged interpolated (coasted over a missed
-     * detection, mask preset).
-     * @type {{ onlineIds: number, onlineInterpolated: number, ids: number, joins: number, filled: number, ms: number } | null}
-     */
-    this.offlineReport = null;
     /** @type {{ a: number | null, b: number | null }} */
     this.selection = { a: null, b: null };
     this.options = { masks: true, boxes: true, trails: true, gt: false };
@@ -88,7 +77,8 @@ export class App {
     /** Worker-side milliseconds per frame, for the status line. */
     this.lastTimings = { detect: 0, track: 0, total: 0 };
     this.lastEdit = '';
-    this.lastScore = 0;
+    /** Live scores, throttled while tracking. */
+    this.scorer = new Scorer(() => this.score());
     /** @type {import('./view/panel.js').Scores | null} */
     this.scores = null;
     /** Serialises frame grabs: one <video> can seek to one place at a time. */
@@ -119,15 +109,11 @@ export class App {
       onSelect: (id, add) => this.select(id, add),
       onAction: (a) => this.action(a),
       // The renumbered track stays selected under its new id.
-      onRenumber: (to) =>
-        this.edit(() => {
-          this.model.reassign(this.need(this.selection.a), to);
-          this.selection = { a: to, b: null };
-        }),
+      onRenumber: (to) => this.edit(() => renumber(this.model, this.selection, to)),
     }, colour);
     this.model.subscribe(() => {
       this.validateSelection();
-      this.scoreSoon();
+      if (this.gt) this.scorer.request();
       this.render();
     });
     this.bindControls();
@@ -180,13 +166,8 @@ export class App {
     this.source = source;
     // A detector with classes names them: the overlay shows them and exports carry them.
     if (opened.classes.length) this.labels = opened.classes.flatMap((name, i) => (name ? [{ class: i, name }] : []));
-    this.tracking = true;
-    this.frames = source.frames ?? 0;
+    this.session.open({ frames: source.frames ?? 0, offlineCapable: opened.offline });
     this.cur = 0;
-    this.processed = 0;
-    this.finished = false;
-    this.offlineCapable = opened.offline;
-    this.offlineReport = null;
     this.selection = { a: null, b: null };
     this.fps.reset();
     this.model.replaceAll([]);
@@ -208,16 +189,12 @@ export class App {
 
   /** Frames the scrubber and the timeline span (the whole source when its length is known). */
   get lastFrame() {
-    return this.frames || Math.max(this.processed, this.model.table.lastFrame());
+    return this.session.frames || Math.max(this.session.processed, this.model.table.lastFrame());
   }
 
-  /**
-   * The last frame a seek may show: while tracking, the last frame tracked. A frame past it
-   * has no tracks yet, so showing its raw pixels under the frame counter would pass an
-   * untracked frame off as tracked; play (or →) tracks on from there.
-   */
+  /** The last frame a seek may show (see `Session.lastShown`); play (or →) tracks on from there. */
   get lastShown() {
-    return this.tracking ? this.processed : this.lastFrame;
+    return this.session.lastShown(this.lastFrame);
   }
 
   async togglePlay() {
@@ -246,8 +223,9 @@ export class App {
 
   /** The play loop: replays what is tracked, tracks what is not, in the chosen mode. */
   async run() {
-    if (this.mode === 'offline' && this.tracking && !this.finished) {
-      if (this.offlineCapable) {
+    const session = this.session;
+    if (this.mode === 'offline' && session.offlinePending) {
+      if (session.offlineCapable) {
         await this.runOffline();
         return;
       }
@@ -257,11 +235,11 @@ export class App {
     const f0 = this.cur;
     while (this.playing) {
       const next = this.cur + 1;
-      if (this.frames && next > this.frames) break;
-      if (!this.tracking || next <= this.processed) {
+      if (session.frames && next > session.frames) break;
+      if (!session.needsTracking(next)) {
         await this.show(next);
       } else {
-        await this.track({ until: this.frames || Infinity, display: 'every' });
+        await this.track({ until: session.frames || Infinity, display: 'every' });
         if (this.source?.kind !== 'webcam') break;
       }
       if (this.speed === 'realtime') await this.pace(t0, this.cur - f0);
@@ -289,28 +267,37 @@ export class App {
     progress.hidden = false;
     progress.max = 1;
     progress.dataset.phase = 'online';
-    if (this.processed < (this.frames || 0)) {
-      await this.track({ until: this.frames, display: 'throttled' });
+    const session = this.session;
+    if (!session.allTracked) {
+      await this.track({ until: session.frames, display: 'throttled' });
     }
-    if (!this.playing || (this.frames && this.processed < this.frames)) return;
-    if (!this.finished) {
+    if (!this.playing || !session.allTracked) return;
+    if (session.offlinePending) {
+      session.beginFinishing();
       this.status('offline pass…');
       const phases = Object.keys(PHASES);
-      const res = await this.worker.finish((p) => {
-        const i = phases.indexOf(p.phase);
-        const done = p.phase === 'done' ? 1 : (Math.max(0, i) + p.fraction) / phases.length;
-        progress.value = ONLINE_SHARE + (1 - ONLINE_SHARE) * done;
-        progress.dataset.phase = p.phase;
-        const name = PHASES[/** @type {keyof typeof PHASES} */ (p.phase)];
-        if (name) this.status(`offline pass: ${name}…`);
-      });
+      /** @type {Awaited<ReturnType<typeof this.worker.finish>>} */
+      let res;
+      try {
+        res = await this.worker.finish((p) => {
+          const i = phases.indexOf(p.phase);
+          const done = p.phase === 'done' ? 1 : (Math.max(0, i) + p.fraction) / phases.length;
+          progress.value = ONLINE_SHARE + (1 - ONLINE_SHARE) * done;
+          progress.dataset.phase = p.phase;
+          const name = PHASES[/** @type {keyof typeof PHASES} */ (p.phase)];
+          if (name) this.status(`offline pass: ${name}…`);
+        });
+      } catch (e) {
+        // The pass can run again: play (Run) retries it.
+        session.abortFinishing();
+        throw e;
+      }
       const onlineIds = this.model.table.ids().length;
       const onlineInterpolated = this.model.table.all().filter((r) => r.interpolated).length;
       const applied = this.model.relink({ joins: res.joins, filled: res.filled });
       this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
-      this.finished = true;
       const ids = this.model.table.ids().length;
-      this.offlineReport = { onlineIds, onlineInterpolated, ids, joins: applied.joined, filled: applied.filled, ms: res.ms };
+      session.finish({ onlineIds, onlineInterpolated, ids, joins: applied.joined, filled: applied.filled, ms: res.ms });
       const skipped = res.joins.length - applied.joined;
       this.status(
         `offline pass: ${onlineIds} → ${ids} tracks (${applied.joined} joins, ${applied.filled} shapes filled in, ` +
@@ -331,7 +318,7 @@ export class App {
     const progress = byId('progress', HTMLProgressElement);
     /** @type {Array<Promise<StepResult>>} */
     const inflight = [];
-    let n = this.processed + 1;
+    let n = this.session.processed + 1;
     let lastDraw = 0;
     while (true) {
       while (this.playing && inflight.length < 2 && n <= until) {
@@ -350,7 +337,8 @@ export class App {
         this.cur = res.frame;
         this.render();
       }
-      progress.value = this.frames ? (ONLINE_SHARE * res.frame) / this.frames : 0;
+      const frames = this.session.frames;
+      progress.value = frames ? (ONLINE_SHARE * res.frame) / frames : 0;
       if (src.kind === 'webcam' && !this.playing) break;
     }
     if (display === 'throttled') {
@@ -387,9 +375,14 @@ export class App {
     return posted.then((o) => o.result);
   }
 
-  /** Takes one tracked frame into the table. @param {StepResult} res */
+  /**
+   * Takes one tracked frame into the table. A result the session does not wait for (from a
+   * source replaced meanwhile) is dropped: its shapes belong to another video.
+   * @param {StepResult} res
+   */
   accept(res) {
-    this.processed = res.frame;
+    if (this.session.phase !== 'tracking' || res.frame !== this.session.processed + 1) return;
+    this.session.trackedFrame(res.frame);
     this.fps.tick(performance.now());
     this.lastTimings = res.timings;
     if (res.groundTruth && this.gt) {
@@ -406,8 +399,8 @@ export class App {
   async stepForward() {
     if (!this.source) return;
     const next = this.cur + 1;
-    if (this.frames && next > this.frames) return;
-    if (this.tracking && next > this.processed) {
+    if (this.session.frames && next > this.session.frames) return;
+    if (this.session.needsTracking(next)) {
       this.playing = true;
       try {
         await this.track({ until: next, display: 'every' });
@@ -496,9 +489,7 @@ export class App {
 
   /** A selected track that no longer exists (merged away, deleted) is deselected. */
   validateSelection() {
-    const has = (/** @type {number | null} */ id) => id !== null && this.model.table.has(id);
-    if (!has(this.selection.b)) this.selection.b = null;
-    if (!has(this.selection.a)) this.selection = { a: this.selection.b, b: null };
+    this.selection = validSelection((id) => this.model.table.has(id), this.selection);
   }
 
   deselect() {
@@ -517,23 +508,19 @@ export class App {
     this.select(pool[j], false);
   }
 
-  /** @param {number | null} id */
-  need(id) {
-    if (id === null) throw new EditError('select a track first');
-    return id;
-  }
-
   /**
-   * Runs an edit, reporting a refusal in the status line instead of throwing. The status line
-   * then says what was done (or `fn`'s own note about it), so it never shows a message about
+   * Runs an edit command (model/commands.js), reporting a refusal in the status line instead
+   * of throwing. The status line then says what was done, so it never shows a message about
    * an earlier state.
-   * @param {() => string | void} fn
+   * @param {() => import('./model/commands.js').Outcome} fn
    */
   edit(fn) {
     try {
-      const note = fn();
-      this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
-      this.status(note || this.lastEdit);
+      const { selection, note, lastEdit } = fn();
+      this.selection = selection;
+      this.validateSelection();
+      this.lastEdit = lastEdit;
+      this.status(note);
       this.render();
       return true;
     } catch (e) {
@@ -545,53 +532,14 @@ export class App {
     }
   }
 
-  /** @param {'merge' | 'swap' | 'split' | 'renumber' | 'delete' | 'deleteRecord' | 'undo' | 'redo'} a */
+  /** @param {import('./model/commands.js').Command | 'renumber'} a */
   action(a) {
-    const { a: x, b: y } = this.selection;
-    switch (a) {
-      case 'merge':
-        this.edit(() => {
-          if (y === null) throw new EditError('shift-click a second track to merge into the first');
-          const { dropped } = this.model.merge(this.need(x), y);
-          if (dropped) return `merge ${y} into ${x}: ${dropped} filled-in shape(s) gave way to seen ones`;
-        });
-        break;
-      case 'swap':
-        this.edit(() => {
-          if (y === null) throw new EditError('shift-click a second track to swap with');
-          this.model.swap(this.need(x), y, this.cur);
-        });
-        break;
-      case 'split':
-        this.edit(() => {
-          const fresh = this.model.split(this.need(x), this.cur);
-          this.selection = { a: fresh, b: null };
-        });
-        break;
-      case 'renumber':
-        if (x !== null) this.panel.askRenumber(this.model.nextId);
-        else this.status('select a track first', true);
-        break;
-      case 'delete':
-        this.edit(() => this.model.deleteTrack(this.need(x)));
-        break;
-      case 'deleteRecord':
-        this.edit(() => this.model.deleteRecord(this.cur, this.need(x)));
-        break;
-      case 'undo': {
-        const l = this.model.undo();
-        this.lastEdit = l ? `undid: ${l}` : '';
-        this.status(this.lastEdit || 'nothing to undo');
-        this.render();
-        break;
-      }
-      case 'redo': {
-        const l = this.model.redo();
-        this.lastEdit = l ? `redid: ${l}` : '';
-        this.status(this.lastEdit || 'nothing to redo');
-        this.render();
-        break;
-      }
+    if (a !== 'renumber') {
+      this.edit(() => runCommand(this.model, a, { selection: this.selection, frame: this.cur }));
+    } else if (this.selection.a !== null) {
+      this.panel.askRenumber(this.model.nextId);
+    } else {
+      this.status('select a track first', true);
     }
   }
 
@@ -630,7 +578,6 @@ export class App {
     const parsed = this.parse(name, text);
     const records = /** @type {TrackRecord[]} */ (parsed.records);
     await this.stop();
-    this.tracking = false;
     this.model.replaceAll(records);
     if (!this.source) {
       let w = parsed.width ?? 0;
@@ -648,7 +595,7 @@ export class App {
       byId('empty').hidden = true;
     }
     const table = this.model.table;
-    this.frames = Math.max(this.frames, parsed.frames ?? 0, table.lastFrame());
+    this.session.imported(Math.max(parsed.frames ?? 0, table.lastFrame()));
     this.status(`${name}: ${records.length} records, ${table.ids().length} tracks`);
     // Stay on the frame shown if the import has tracks there; else open on the first frame that
     // has any (without a source, an empty frame is a blank canvas: it looks like a failed import).
@@ -662,7 +609,7 @@ export class App {
     this.options.gt = true;
     byId('opt-gt', HTMLInputElement).checked = true;
     this.status(`ground truth ${name}: ${this.gt.size} records`);
-    this.scoreSoon(true);
+    this.scorer.request(true);
     this.render();
   }
 
@@ -694,35 +641,14 @@ export class App {
 
   // ---------------------------------------------------------------- scores
 
-  /** @param {boolean} [now] */
-  scoreSoon(now = false) {
-    if (!this.gt) return;
-    const t = performance.now();
-    if (!now && t - this.lastScore < SCORE_MS) {
-      if (!this.scoreTimer) {
-        this.scoreTimer = setTimeout(() => {
-          this.scoreTimer = 0;
-          this.scoreSoon(true);
-        }, SCORE_MS);
-      }
-      return;
-    }
-    this.lastScore = t;
-    this.score();
-  }
-
-  /** @type {ReturnType<typeof setTimeout> | 0} */
-  scoreTimer = 0;
-
   /** Scores the table against the ground truth with the core's evaluator (frames seen so far). */
   score() {
     if (!this.gt) return;
-    const upto = this.tracking ? this.processed : this.lastFrame;
-    const gt = this.gt.all().filter((r) => r.frame <= upto);
-    const res = this.model.table.all().filter((r) => r.frame <= upto);
-    if (!gt.length || upto < 1) return;
+    const upto = this.session.lastShown(this.lastFrame);
+    const inputs = scoreInputs(this.gt, this.model.table, upto);
+    if (!inputs) return;
     try {
-      this.scores = this.core.evaluate(gt, res, upto, { similarity: 'box' });
+      this.scores = this.core.evaluate(inputs.gt, inputs.res, upto, { similarity: 'box' });
     } catch (e) {
       this.status(`scoring failed: ${e instanceof Error ? e.message : e}`, true);
     }
@@ -771,14 +697,14 @@ export class App {
     const scrub = byId('scrub', HTMLInputElement);
     scrub.max = String(Math.max(1, this.lastFrame));
     scrub.value = String(Math.max(1, this.cur));
-    const total = this.frames ? `/${this.frames}` : '';
+    const total = this.session.frames ? `/${this.session.frames}` : '';
     byId('frame-no').textContent = this.cur ? `${this.cur}${total}` : '–';
     const fps = this.fps.fps;
     byId('fps').textContent = fps ? `${fps.toFixed(1)} fps` : '– fps';
     byId('fps').title = `per frame: detect ${this.lastTimings.detect.toFixed(1)} ms, track ${this.lastTimings.track.toFixed(1)} ms (worker), draw ${this.renderMs.toFixed(1)} ms (page)`;
     const play = byId('play');
     play.classList.toggle('playing', this.playing);
-    play.classList.toggle('run', !this.playing && this.mode === 'offline' && this.tracking && !this.finished);
+    play.classList.toggle('run', !this.playing && this.mode === 'offline' && this.session.offlinePending);
   }
 
   /**
