@@ -236,3 +236,25 @@ export async function docShot(page, name, element) {
   mkdirSync(SHOTS, { recursive: true });
   await (element ?? page).screenshot({ path: join(SHOTS, `${name}.jpg`), type: 'jpeg', quality: 70 });
 }
+
+/**
+ * A MOTChallenge file of `tracks` tracks: track i lives for 60 frames from a start that walks
+ * across `frames` frames (the timeline test and the browser bench's thousand-track session).
+ * @param {number} tracks
+ * @param {number} frames at least 61
+ * @returns {{ text: string, last: number }} the file and the last frame any track reaches
+ */
+export function crowdTracks(tracks, frames) {
+  const lines = [];
+  let last = 0;
+  for (let id = 1; id <= tracks; id++) {
+    const start = 1 + ((id * 37) % (frames - 60));
+    for (let f = start; f < start + 60; f++) {
+      const x = (id * 13) % 1200;
+      const y = (id * 7) % 680;
+      lines.push(`${f},${id},${x + (f - start)},${y},30,40,1,-1,-1,-1`);
+    }
+    last = Math.max(last, start + 59);
+  }
+  return { text: lines.join('\n') + '\n', last };
+}

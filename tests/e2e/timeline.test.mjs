@@ -5,29 +5,16 @@
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { docShot, watchErrors, withApp, untilState } from './harness.mjs';
+import { crowdTracks, docShot, watchErrors, withApp, untilState } from './harness.mjs';
 
 const PORT = 47396;
 const TRACKS = 1000;
 const FRAMES = 600;
+const CROWD = crowdTracks(TRACKS, FRAMES);
 /** The last frame any track reaches (the timeline's length: an import has no other end). */
-const LAST = Math.max(...Array.from({ length: TRACKS }, (_, i) => 1 + (((i + 1) * 37) % (FRAMES - 60)) + 59));
+const LAST = CROWD.last;
 
 const app = withApp({ port: PORT });
-
-/** A MOTChallenge file: track i lives for 60 frames from a start that walks across the sequence. */
-function thousandTracks() {
-  const lines = [];
-  for (let id = 1; id <= TRACKS; id++) {
-    const start = 1 + ((id * 37) % (FRAMES - 60));
-    for (let f = start; f < start + 60; f++) {
-      const x = (id * 13) % 1200;
-      const y = (id * 7) % 680;
-      lines.push(`${f},${id},${x + (f - start)},${y},30,40,1,-1,-1,-1`);
-    }
-  }
-  return lines.join('\n') + '\n';
-}
 
 /** The timeline's range readout. @param {import('playwright-core').Page} page */
 const readout = (page) => page.evaluate(() => document.getElementById('tl-range')?.textContent ?? '');
@@ -40,7 +27,7 @@ test('a thousand tracks: readable rows, scroll, zoom, pan, reveal, and a virtual
   const errors = watchErrors(page);
   await page.goto(`${app.server.url}?demo=0`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
-  await page.setInputFiles('#file-import', { name: 'crowd.txt', mimeType: 'text/plain', buffer: Buffer.from(thousandTracks()) });
+  await page.setInputFiles('#file-import', { name: 'crowd.txt', mimeType: 'text/plain', buffer: Buffer.from(CROWD.text) });
   await untilState(page, (s) => s.ids.length === TRACKS);
   await nextFrame(page);
 
