@@ -378,3 +378,34 @@ test('no request left localhost', () => {
   assert.ok(app.browser.requests.length > 0, 'requests were recorded');
   assert.deepEqual(app.browser.foreign, []);
 });
+
+test('the detector changes while tracking without reopening: the tracks stay, the next frame uses it', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  // The background detector learns the scene over its first 20 frames: nothing is detected.
+  await page.selectOption('#detector', 'background');
+  await page.evaluate(async () => {
+    const app = /** @type {any} */ (window).__shapetrack.app;
+    await app.openDemo();
+    for (let i = 0; i < 4; i++) await app.stepForward();
+  });
+  let st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.processed, 5);
+  assert.equal(st.detections, 0, 'still learning the background');
+  // Switch to the scene's own masks: frame 6 is detected at once, frames 1–5 stay tracked.
+  await page.selectOption('#detector', 'scene');
+  await page.waitForFunction(() => document.getElementById('status')?.textContent?.includes('from frame 6'));
+  await page.evaluate(async () => {
+    const app = /** @type {any} */ (window).__shapetrack.app;
+    for (let i = 0; i < 12; i++) await app.stepForward();
+  });
+  st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.processed, 17, 'tracking went on from where it was: nothing was reopened');
+  assert.ok(st.detections > 0, 'the new detector finds the scene\'s objects');
+  assert.ok(st.ids.length > 0, `tracks started on the new detector's masks: ${st.ids.length}`);
+  assert.equal(st.source?.kind, 'synth');
+  assert.deepEqual(errors, []);
+});
+

@@ -74,6 +74,8 @@ export class App {
     this.selection = { a: null, b: null };
     this.options = { masks: true, boxes: true, trails: true, gt: false };
     this.fps = new FpsMeter();
+    /** Detections in the last tracked frame. */
+    this.lastDetections = 0;
     /** Worker-side milliseconds per frame, for the status line. */
     this.lastTimings = { detect: 0, track: 0, total: 0 };
     this.lastEdit = '';
@@ -385,6 +387,7 @@ export class App {
     this.session.trackedFrame(res.frame);
     this.fps.tick(performance.now());
     this.lastTimings = res.timings;
+    this.lastDetections = res.detections;
     if (res.groundTruth && this.gt) {
       for (const g of res.groundTruth) this.gt.add(g);
     }
@@ -772,8 +775,9 @@ export class App {
     det.replaceChildren(...listDetectors().map((d) => new Option(d.label, d.name)));
     det.value = this.detector;
     det.addEventListener('change', () => {
-      this.detector = det.value;
-      this.status(`detector: ${det.selectedOptions[0]?.text}; reopen the source to track with it`);
+      Promise.resolve()
+        .then(() => this.changeDetector(det.value, det.selectedOptions[0]?.text ?? det.value))
+        .catch((e) => this.fail(e));
     });
     const speed = byId('speed', HTMLSelectElement);
     speed.value = this.speed;
@@ -815,6 +819,27 @@ export class App {
         .then(() => this.openDropped(list))
         .catch((err) => this.fail(err));
     });
+  }
+
+  /**
+   * Uses another detector: for the next source, and, while a source is being tracked, from its
+   * next frame on (the tracks so far stay; nothing is reopened).
+   * @param {string} name
+   * @param {string} label
+   */
+  async changeDetector(name, label) {
+    this.detector = name;
+    if (this.session.phase !== 'tracking') {
+      this.status(`detector: ${label} (for the next video)`);
+      return;
+    }
+    // Frames in flight finish with the old detector; the switch lands between two frames.
+    const wasPlaying = this.playing;
+    await this.stop();
+    const { classes } = await this.worker.setDetector(name);
+    if (classes.length) this.labels = classes.flatMap((n, i) => (n ? [{ class: i, name: n }] : []));
+    this.status(`detector: ${label} from frame ${this.session.processed + 1}`);
+    if (wasPlaying) this.play();
   }
 
   /** @param {File[]} list */

@@ -85,6 +85,7 @@ function exposeForTests(app) {
       offline: app.session.report,
       fps: app.fps.fps,
       timings: app.lastTimings,
+      detections: app.lastDetections,
       drawMs: app.renderMs,
       ids: app.model.table.ids(),
       selection: app.selection,

@@ -46,6 +46,7 @@
  *   | { type: 'attach', canvas: OffscreenCanvas }
  *   | { type: 'paint', width: number, height: number, bitmap?: ImageBitmap | null }
  *   | { type: 'step', frame: number, bitmap?: ImageBitmap, display?: boolean }
+ *   | { type: 'setDetector', detector: string, detectorOptions?: Record<string, unknown> }
  *   | { type: 'render', frame: number }
  *   | { type: 'finish' }
  *   | { type: 'tracks' }
@@ -105,6 +106,18 @@ export class WorkerClient {
   open(req) {
     return this.request({ type: 'open', ...req });
   }
+  /**
+   * Switches the open session's detector from the next frame on: the tracker and its tracks
+   * stay (its settings are the ones chosen at open), the new detector starts fresh (a
+   * background model learns again).
+   * @param {string} detector
+   * @param {Record<string, unknown>} [detectorOptions]
+   * @returns {Promise<{ classes: string[] }>}
+   */
+  setDetector(detector, detectorOptions) {
+    return this.request({ type: 'setDetector', detector, detectorOptions });
+  }
+
 
   /**
    * Tracks one frame. For a synthetic source the worker renders the frame itself.

@@ -74,6 +74,8 @@ async function dispatch(req) {
       return { result: await step(req.frame, req.bitmap ?? null, req.display !== false), transfer: [] };
     case 'render':
       return { result: render(req.frame), transfer: [] };
+    case 'setDetector':
+      return { result: await setDetector(req.detector, req.detectorOptions), transfer: [] };
     case 'finish':
       return { result: finish(req.id), transfer: [] };
     case 'tracks':
@@ -138,6 +140,22 @@ async function open(req) {
     classes: detector.classes ?? [],
     offline: tracker.offline,
   };
+}
+
+/**
+ * Replaces the session's detector (the tracker keeps its tracks and settings). The new one is
+ * made and initialised before the old one goes, so a detector that fails to load (the SSD's
+ * model files) leaves the session as it was.
+ * @param {string} name
+ * @param {Record<string, unknown>} [options]
+ */
+async function setDetector(name, options) {
+  const s = need();
+  const detector = createDetector(name, options);
+  await detector.init({ core: s.core, width: s.width, height: s.height });
+  s.detector.dispose?.();
+  s.detector = detector;
+  return { classes: detector.classes ?? [] };
 }
 
 /**
