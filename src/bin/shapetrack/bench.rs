@@ -44,6 +44,42 @@ pub struct Args {
     /// Also write the rows as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Also compare the browser build with native on these app scenes (`demo`, `default`,
+    /// `occlusion`), masks with frames: the same scene tracked natively here and in wasm under
+    /// Node (`scripts/bench-wasm.mjs`, needs `node` and the built `www/pkg`), one after the
+    /// other in this run, and the ratio of their times per frame.
+    #[arg(long, value_delimiter = ',')]
+    wasm: Vec<WasmScene>,
+}
+
+/// The synthetic scenes the app (and the wasm `SynthScene`) offers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum WasmScene {
+    /// 1280×720, 600 frames (the app's demo).
+    Demo,
+    /// 640×480, 300 frames.
+    Default,
+    /// 640×480, 300 frames, objects passing behind occluders.
+    Occlusion,
+}
+
+impl WasmScene {
+    fn name(self) -> &'static str {
+        match self {
+            WasmScene::Demo => "demo",
+            WasmScene::Default => "default",
+            WasmScene::Occlusion => "occlusion",
+        }
+    }
+
+    /// The scene's settings: the same constructors the wasm `SynthScene` uses.
+    fn config(self) -> SynthConfig {
+        match self {
+            WasmScene::Demo => SynthConfig::demo(),
+            WasmScene::Default => SynthConfig::default(),
+            WasmScene::Occlusion => SynthConfig::occlusion_scene(0),
+        }
+    }
 }
 
 /// One measured configuration. Times are milliseconds per frame.
@@ -181,11 +217,48 @@ pub fn run(args: Args) -> crate::CliResult {
     for line in scaling(&rows) {
         println!("{line}");
     }
+    for &scene in &args.wasm {
+        println!("{}", wasm_vs_native(scene)?);
+    }
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&rows)?;
         shapetrack::io::write_text(path, &text)?;
     }
     Ok(())
+}
+
+/// Tracks an app scene natively (mask mode), then the same scene in wasm under Node, and says
+/// how their times per frame compare (issue 10's target: wasm at most 1.4× native).
+fn wasm_vs_native(scene: WasmScene) -> Result<String, Box<dyn std::error::Error>> {
+    let frames: Vec<SynthFrame> = Scene::new(scene.config())?.collect();
+    let t = measure(&frames, Mode::Mask)?;
+    let native = 1e3 * t.total() / t.frames.max(1) as f64;
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/bench-wasm.mjs");
+    let out = std::process::Command::new("node")
+        .arg(&script)
+        .args(["--scene", scene.name()])
+        .output()
+        .map_err(|e| format!("--wasm runs `node {}`: {e}", script.display()))?;
+    if !out.status.success() {
+        return Err(format!(
+            "node {} failed (build the wasm first: node scripts/build-wasm.mjs): {}",
+            script.display(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        )
+        .into());
+    }
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let wasm = v["ms_per_frame"]
+        .as_f64()
+        .ok_or("bench-wasm.mjs printed no ms_per_frame")?;
+    Ok(format!(
+        "wasm vs native, scene {} ({}x{}, {} frames, masks): native {native:.2} ms/frame, wasm (Node) {wasm:.2} ms/frame: ×{:.2}",
+        scene.name(),
+        frames.first().map_or(0, |f| f.width),
+        frames.first().map_or(0, |f| f.height),
+        frames.len(),
+        wasm / native.max(1e-9)
+    ))
 }
 
 /// Per resolution and mode, how the time per frame grows from the fewest shapes measured to
