@@ -46,7 +46,7 @@ const steps = [
   { name: 'cargo fmt', needs: ['setup'], run: () => sh('cargo', ['fmt', '--all', '--check']) },
   { name: 'cargo clippy', needs: ['setup'], run: () => sh('cargo', ['clippy', '--all-targets', '--', '-D', 'warnings']) },
   {
-    // src/wasm.rs only exists for wasm32, so the native clippy run never sees it.
+    // src/wasm/ only exists for wasm32, so the native clippy run never sees it.
     name: 'cargo clippy wasm32',
     needs: ['setup'],
     run: () => sh('cargo', ['clippy', ...WASM, '--lib', ...wasmTests(), '--', '-D', 'warnings']),

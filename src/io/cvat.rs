@@ -41,6 +41,7 @@ const MAX_DEPTH: usize = 64;
 const MAX_FRAMES: u32 = super::limits::MAX_FRAME;
 
 use super::limits::{MAX_RECORDS, MAX_TOTAL_RUNS};
+use super::rle::{bitmap_runs, for_each_run_pixel};
 
 /// Shapes and mask runs a file has expanded to so far.
 #[derive(Default)]
@@ -415,16 +416,11 @@ fn parse_shape(ctx: &Ctx, n: &Node, meta: &CvatMeta) -> Result<Shape, IoError> {
                 ));
             }
             let mut full = vec![0u8; meta.width as usize * meta.height as usize];
-            let mut p = 0u64;
-            for (i, &r) in runs.iter().enumerate() {
-                if i % 2 == 1 {
-                    for q in p..p + r {
-                        let (y, x) = ((q / w as u64) as usize, (q % w as u64) as usize);
-                        full[(top as usize + y) * meta.width as usize + left as usize + x] = 1;
-                    }
-                }
-                p += r;
-            }
+            for_each_run_pixel(&runs, w as u64, |y, x| {
+                full[(top as usize + y as usize) * meta.width as usize
+                    + left as usize
+                    + x as usize] = 1;
+            });
             let rle = Rle::encode(meta.width, meta.height, &full)
                 .map_err(|e| ctx.err(n.pos, e.to_string()))?;
             Geometry::Mask(rle)
@@ -660,18 +656,7 @@ fn write_shape(out: &mut String, r: &Record, cvat_frame: u32, outside: bool, key
     match r.mask.as_ref().map(Rle::to_mask) {
         Some(m) if !m.is_empty() => {
             // CVAT's encoding: row-major runs inside the mask's box, background first.
-            let mut runs: Vec<u32> = Vec::new();
-            let (mut cur, mut run) = (0u8, 0u32);
-            for &v in m.data() {
-                if v != cur {
-                    runs.push(run);
-                    run = 0;
-                    cur = v;
-                }
-                run += 1;
-            }
-            runs.push(run);
-            let rle: Vec<String> = runs.iter().map(u32::to_string).collect();
+            let rle: Vec<String> = bitmap_runs(m.data()).iter().map(u64::to_string).collect();
             let _ = write!(
                 out,
                 "    <mask {common} rle=\"{}\" left=\"{}\" top=\"{}\" width=\"{}\" height=\"{}\" z_order=\"0\"></mask>",

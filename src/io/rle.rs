@@ -92,6 +92,40 @@ pub(crate) fn runs_extent(
     (l0 != u64::MAX).then_some((l0, p0, l1, p1))
 }
 
+/// The run lengths of a row-major bitmap (non-zero = foreground), alternating background /
+/// foreground and starting with background (0 when the first pixel is foreground). CVAT's
+/// `<mask rle>` and VOT's `m…` masks store a mask's box this way; one encoder for both.
+pub(crate) fn bitmap_runs(bitmap: &[u8]) -> Vec<u64> {
+    let mut runs = Vec::new();
+    let (mut cur, mut run) = (0u8, 0u64);
+    for &v in bitmap {
+        if v != cur {
+            runs.push(run);
+            run = 0;
+            cur = v;
+        }
+        run += 1;
+    }
+    runs.push(run);
+    runs
+}
+
+/// Calls `set(line, position)` for every foreground pixel of `runs` (background first, as
+/// [`bitmap_runs`] writes them) laid along lines of `line` pixels: the decoder matching
+/// [`bitmap_runs`], for CVAT and VOT masks. The caller has checked the runs sum to at most the
+/// bitmap's size, so positions stay inside it.
+pub(crate) fn for_each_run_pixel(runs: &[u64], line: u64, mut set: impl FnMut(u64, u64)) {
+    let mut p = 0u64;
+    for (i, &r) in runs.iter().enumerate() {
+        if i % 2 == 1 {
+            for q in p..p + r {
+                set(q / line, q % line);
+            }
+        }
+        p += r;
+    }
+}
+
 impl Rle {
     /// Encodes a row-major full-image bitmap (`width·height` bytes, non-zero = foreground).
     pub fn encode(width: u32, height: u32, bitmap: &[u8]) -> Result<Rle, FrameError> {
@@ -394,6 +428,22 @@ impl Rle {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bitmap_runs_start_with_background_and_decode_back() {
+        assert_eq!(bitmap_runs(&[]), [0]);
+        assert_eq!(bitmap_runs(&[1, 1, 0]), [0, 2, 1]);
+        assert_eq!(bitmap_runs(&[0, 0, 1, 0, 1, 1]), [2, 1, 1, 2]);
+        // A 3-wide bitmap round trips through (row, column) positions.
+        let bitmap = [0u8, 1, 1, 1, 0, 0, 0, 0, 1];
+        let mut back = [0u8; 9];
+        for_each_run_pixel(&bitmap_runs(&bitmap), 3, |row, col| {
+            back[(row * 3 + col) as usize] = 1;
+        });
+        assert_eq!(back, bitmap);
+        // A zero-length foreground run paints nothing.
+        for_each_run_pixel(&[2, 0, 1], 3, |_, _| panic!("no foreground"));
+    }
 
     /// Strings produced by pycocotools 2.0 (`mask.encode(np.asfortranarray(m))['counts']`).
     #[test]

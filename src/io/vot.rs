@@ -15,7 +15,7 @@
 //! by [`parse_anchor_values`].
 
 use super::limits::MAX_TOTAL_PIXELS;
-use super::rle::runs_extent;
+use super::rle::{bitmap_runs, for_each_run_pixel, runs_extent};
 use super::{IoError, Rle};
 use crate::frame::{BBox, Mask, Point};
 use std::fmt::Write as _;
@@ -174,8 +174,9 @@ fn parse_region_counted(
             }
             p += r;
         }
-        let runs = ints[4..].iter().map(|&r| r as u64);
-        let Some((r0, c0, r1, c1)) = runs_extent(runs, w as u64, total as u64) else {
+        let runs: Vec<u64> = ints[4..].iter().map(|&r| r as u64).collect();
+        let Some((r0, c0, r1, c1)) = runs_extent(runs.iter().copied(), w as u64, total as u64)
+        else {
             return Ok(Region::Mask(Mask::empty()));
         };
         let (r0, c0, r1, c1) = (r0 as i64, c0 as i64, r1 as i64, c1 as i64);
@@ -193,18 +194,12 @@ fn parse_region_counted(
             ));
         }
         let mut data = vec![0u8; (bw * bh) as usize];
-        let mut p = 0i64;
-        for (i, &r) in ints[4..].iter().enumerate() {
-            if i % 2 == 1 {
-                for q in p..p + r {
-                    let (row, col) = (q / w - r0, q % w - c0);
-                    if let Some(v) = data.get_mut((row * bw + col) as usize) {
-                        *v = 1;
-                    }
-                }
+        for_each_run_pixel(&runs, w as u64, |row, col| {
+            let (row, col) = (row as i64 - r0, col as i64 - c0);
+            if let Some(v) = data.get_mut((row * bw + col) as usize) {
+                *v = 1;
             }
-            p += r;
-        }
+        });
         let (x, y) = (x.saturating_add(c0 as i32), y.saturating_add(r0 as i32));
         let m = Mask::new(x, y, bw as u32, bh as u32, data).map_err(|e| IoError::Invalid {
             file: file.to_string(),
@@ -291,18 +286,7 @@ pub fn format_region(r: &Region) -> String {
         Region::Mask(m) => {
             let m = m.tight();
             let _ = write!(s, "m{},{},{},{}", m.x(), m.y(), m.width(), m.height());
-            let (mut cur, mut run) = (0u8, 0u64);
-            let mut runs = Vec::new();
-            for &v in m.data() {
-                if v != cur {
-                    runs.push(run);
-                    run = 0;
-                    cur = v;
-                }
-                run += 1;
-            }
-            runs.push(run);
-            for r in runs {
+            for r in bitmap_runs(m.data()) {
                 let _ = write!(s, ",{r}");
             }
         }

@@ -1,0 +1,271 @@
+//! Detections: lists handed in by detectors written in JS, and the background detector.
+
+use super::*;
+use crate::detect::{
+    BackgroundConfig, BackgroundSubtractor, Connectivity, Detector, ShadowConfig, UpdatePolicy,
+};
+use crate::frame::{BBox, Detection, Mask};
+use serde::{Deserialize, Serialize};
+use tsify::{Ts, Tsify};
+use wasm_bindgen::prelude::*;
+
+/// A mask handed in by a JS detector: `data` holds `width·height` bytes (non-zero = object)
+/// for the rectangle whose top-left pixel is `(x, y)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+pub struct MaskInput {
+    /// Image x of the left column.
+    pub x: i32,
+    /// Image y of the top row.
+    pub y: i32,
+    /// Bitmap width.
+    pub width: u32,
+    /// Bitmap height.
+    pub height: u32,
+    /// Row-major bytes.
+    #[serde(with = "serde_bytes")]
+    #[tsify(type = "Uint8Array")]
+    pub data: Vec<u8>,
+    /// Detector confidence; defaults to 1.
+    #[serde(default = "one")]
+    #[tsify(optional)]
+    pub score: f64,
+    /// Class label; -1 (the default) when unknown.
+    #[serde(default = "minus_one_i32")]
+    #[tsify(optional)]
+    pub class: i32,
+}
+
+/// A box handed in by a JS detector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+pub struct BoxInput {
+    /// The box.
+    pub bbox: BoxJs,
+    /// Detector confidence; defaults to 1.
+    #[serde(default = "one")]
+    #[tsify(optional)]
+    pub score: f64,
+    /// Class label; -1 (the default) when unknown.
+    #[serde(default = "minus_one_i32")]
+    #[tsify(optional)]
+    pub class: i32,
+}
+
+/// What a detector written in JS returns: masks, boxes, or both.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+pub struct DetectionLists {
+    /// Mask detections.
+    #[serde(default)]
+    #[tsify(optional)]
+    pub masks: Vec<MaskInput>,
+    /// Box-only detections.
+    #[serde(default)]
+    #[tsify(optional)]
+    pub boxes: Vec<BoxInput>,
+}
+
+/// One detection as JS sees it (for drawing detector output).
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct DetectionJs {
+    /// Bounding box.
+    pub bbox: BoxJs,
+    /// Cropped mask, when the detector gave one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[tsify(optional)]
+    pub mask: Option<MaskBitmap>,
+    /// Confidence.
+    pub score: f64,
+    /// Class label (-1 when unknown).
+    pub class: i32,
+}
+
+impl From<&Detection> for DetectionJs {
+    fn from(d: &Detection) -> Self {
+        DetectionJs {
+            bbox: d.bbox.into(),
+            mask: d.mask.as_ref().map(MaskBitmap::from),
+            score: d.score,
+            class: d.class,
+        }
+    }
+}
+
+/// A list of detections as JS sees it.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+#[serde(transparent)]
+pub struct DetectionList(pub Vec<DetectionJs>);
+
+/// One frame's detections, kept in wasm memory: the background detector's output goes to the
+/// tracker without crossing into JS. Detectors written in JS build one with `fromLists`.
+#[wasm_bindgen]
+pub struct Detections {
+    pub(super) inner: Vec<Detection>,
+}
+
+#[wasm_bindgen]
+impl Detections {
+    /// Detections from a JS detector's masks and boxes (checked: sizes, finite boxes).
+    #[wasm_bindgen(js_name = fromLists)]
+    pub fn from_lists(lists: Ts<DetectionLists>) -> Result<Detections, JsValue> {
+        let lists = rust(lists)?;
+        let mut inner = Vec::with_capacity(lists.masks.len() + lists.boxes.len());
+        for m in lists.masks {
+            let mask = Mask::new(m.x, m.y, m.width, m.height, m.data).map_err(js_error)?;
+            let mut d = Detection::from_mask(mask, m.score);
+            d.class = m.class;
+            inner.push(d);
+        }
+        for b in lists.boxes {
+            let bbox = BBox::checked(b.bbox.x, b.bbox.y, b.bbox.w, b.bbox.h).map_err(js_error)?;
+            let mut d = Detection::from_box(bbox, b.score);
+            d.class = b.class;
+            inner.push(d);
+        }
+        Ok(Detections { inner })
+    }
+
+    /// Number of detections.
+    #[wasm_bindgen(getter)]
+    pub fn len(&self) -> usize {
+        self.inner.len()
+    }
+
+    /// Whether there is no detection.
+    #[wasm_bindgen(getter, js_name = isEmpty)]
+    pub fn is_empty(&self) -> bool {
+        self.inner.is_empty()
+    }
+
+    /// The detections as plain JS objects (copies the masks).
+    #[wasm_bindgen(js_name = toList)]
+    pub fn to_list(&self) -> Result<Ts<DetectionList>, JsValue> {
+        ts(&DetectionList(
+            self.inner.iter().map(DetectionJs::from).collect(),
+        ))
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Background detector
+
+/// The adaptive background subtractor (thesis eq. 1–2) with morphology and connected
+/// components: one mask per moving object, no model weights.
+#[wasm_bindgen]
+pub struct BackgroundDetector {
+    inner: BackgroundSubtractor,
+}
+
+#[wasm_bindgen]
+impl BackgroundDetector {
+    /// A detector with the core's defaults, or the settings given (`BackgroundConfig`'s
+    /// fields; missing ones keep their defaults).
+    #[wasm_bindgen(constructor)]
+    pub fn new(config: Option<Ts<BackgroundOptions>>) -> Result<BackgroundDetector, JsValue> {
+        let cfg = match config {
+            Some(c) => settings(c)?.into_core()?,
+            None => BackgroundConfig::default(),
+        };
+        Ok(BackgroundDetector {
+            inner: BackgroundSubtractor::new(cfg).map_err(js_error)?,
+        })
+    }
+
+    /// Detects the moving objects of the frame in `buf` (frames must come in order).
+    pub fn detect(&mut self, buf: &FrameBuffer) -> Result<Detections, JsValue> {
+        let frame = buf.frame()?;
+        let inner = self.inner.detect(&frame).map_err(js_error)?;
+        Ok(Detections { inner })
+    }
+
+    /// Forgets the background model (e.g. after a cut or a size change).
+    pub fn reset(&mut self) {
+        self.inner.reset();
+    }
+}
+
+/// Settings of the background detector; every field is optional and defaults to the core's
+/// `BackgroundConfig::default()`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct BackgroundOptions {
+    /// Frames averaged into the initial background.
+    #[tsify(optional)]
+    pub init_frames: Option<u32>,
+    /// Learning rate of background pixels, in (0, 1].
+    #[tsify(optional)]
+    pub alpha: Option<f32>,
+    /// Learning rate of foreground pixels (selective update); 0 = only by absorption.
+    #[tsify(optional)]
+    pub foreground_alpha: Option<f32>,
+    /// Learn every pixel at `alpha` (the thesis' eq. 2 as written) instead of selectively.
+    #[tsify(optional)]
+    pub update_all: Option<bool>,
+    /// Grey-level difference above which a pixel is foreground.
+    #[tsify(optional)]
+    pub threshold: Option<f32>,
+    /// Frames after which a still foreground pixel is absorbed into the background (0 = never).
+    #[tsify(optional)]
+    pub absorb_frames: Option<u32>,
+    /// Suppress cast shadows (with the core's default shadow settings).
+    #[tsify(optional)]
+    pub shadows: Option<bool>,
+    /// Radius of the opening (0 = none).
+    #[tsify(optional)]
+    pub open_radius: Option<u32>,
+    /// Radius of the closing (0 = none).
+    #[tsify(optional)]
+    pub close_radius: Option<u32>,
+    /// Blobs with fewer pixels are dropped.
+    #[tsify(optional)]
+    pub min_area: Option<u32>,
+    /// Pixel connectivity of blobs: 4 or 8.
+    #[tsify(optional, type = "4 | 8")]
+    pub connectivity: Option<u8>,
+}
+
+impl BackgroundOptions {
+    fn into_core(self) -> Result<BackgroundConfig, JsValue> {
+        let mut c = BackgroundConfig::default();
+        if let Some(v) = self.init_frames {
+            c.init_frames = v;
+        }
+        if let Some(v) = self.alpha {
+            c.alpha = v;
+        }
+        match (self.update_all, self.foreground_alpha) {
+            (Some(true), _) => c.update = UpdatePolicy::All,
+            (_, Some(foreground_alpha)) => c.update = UpdatePolicy::Selective { foreground_alpha },
+            _ => {}
+        }
+        if let Some(v) = self.threshold {
+            c.threshold = v;
+        }
+        if let Some(v) = self.absorb_frames {
+            c.absorb_frames = v;
+        }
+        if let Some(v) = self.shadows {
+            c.shadow = v.then(ShadowConfig::default);
+        }
+        if let Some(v) = self.open_radius {
+            c.open_radius = v;
+        }
+        if let Some(v) = self.close_radius {
+            c.close_radius = v;
+        }
+        if let Some(v) = self.min_area {
+            c.min_area = u64::from(v);
+        }
+        match self.connectivity {
+            None => {}
+            Some(4) => c.connectivity = Connectivity::Four,
+            Some(8) => c.connectivity = Connectivity::Eight,
+            Some(n) => {
+                return Err(js_error(BindingError::Option {
+                    name: "connectivity",
+                    message: format!("{n} (expected 4 or 8)"),
+                }))
+            }
+        }
+        // The core checks ranges when the detector is built.
+        Ok(c)
+    }
+}
