@@ -234,6 +234,13 @@ impl BackgroundSubtractor {
         self.size.is_some() && self.seen >= self.cfg.init_frames
     }
 
+    /// Frames of the initial background learnt so far, and how many it takes (`init_frames`):
+    /// a front end shows "learning the background" until they are equal.
+    pub fn warmup(&self) -> (u32, u32) {
+        let seen = if self.size.is_some() { self.seen } else { 0 };
+        (seen.min(self.cfg.init_frames), self.cfg.init_frames)
+    }
+
     /// Forgets the model and the frame size: the next frame starts a new initialisation.
     pub fn reset(&mut self) {
         self.size = None;
@@ -555,9 +562,16 @@ mod tests {
         })
         .unwrap();
         let empty = frame_with_square(64, 48, None, 3);
-        for _ in 0..3 {
+        assert_eq!(bs.warmup(), (0, 3));
+        for i in 0..3 {
             let f = Frame::rgb(&empty, 64, 48).unwrap();
             assert!(bs.detect(&f).unwrap().is_empty());
+            assert_eq!(
+                bs.warmup(),
+                (i + 1, 3),
+                "warm-up progress after frame {}",
+                i + 1
+            );
         }
         assert!(bs.is_ready());
         let img = frame_with_square(64, 48, Some((10, 12, 15)), 3);
@@ -566,6 +580,9 @@ mod tests {
         assert_eq!(d[0].bbox, crate::frame::BBox::new(10.0, 12.0, 15.0, 15.0));
         assert_eq!(d[0].mask.as_ref().unwrap().area(), 225);
         assert!(d[0].score > 0.0 && d[0].score <= 1.0);
+        assert_eq!(bs.warmup(), (3, 3), "stays complete once learnt");
+        bs.reset();
+        assert_eq!(bs.warmup(), (0, 3), "a reset learns again");
     }
 
     #[test]

@@ -180,6 +180,19 @@ impl BackgroundDetector {
     pub fn reset(&mut self) {
         self.inner.reset();
     }
+
+    /// Frames of the initial background learnt so far (detections start once it equals
+    /// `warmupFrames`).
+    #[wasm_bindgen(getter, js_name = warmupSeen)]
+    pub fn warmup_seen(&self) -> u32 {
+        self.inner.warmup().0
+    }
+
+    /// Frames the initial background takes to learn (`init_frames`).
+    #[wasm_bindgen(getter, js_name = warmupFrames)]
+    pub fn warmup_frames(&self) -> u32 {
+        self.inner.warmup().1
+    }
 }
 
 /// Settings of the background detector; every field is optional and defaults to the core's

@@ -379,7 +379,7 @@ test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });
 
-test('the detector changes while tracking without reopening: the tracks stay, the next frame uses it', async () => {
+test('a warming-up background model says so; the detector changes while tracking without reopening', async () => {
   const page = await app.browser.context.newPage();
   const errors = watchErrors(page);
   await page.goto(`${app.server.url}?demo=0`);
@@ -394,6 +394,7 @@ test('the detector changes while tracking without reopening: the tracks stay, th
   let st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   assert.equal(st.processed, 5);
   assert.equal(st.detections, 0, 'still learning the background');
+  assert.match(st.status, /^learning the background: 5\/20 frames/, 'the status line says why nothing is found');
   // Switch to the scene's own masks: frame 6 is detected at once, frames 1–5 stay tracked.
   await page.selectOption('#detector', 'scene');
   await page.waitForFunction(() => document.getElementById('status')?.textContent?.includes('from frame 6'));

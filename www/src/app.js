@@ -388,6 +388,7 @@ export class App {
     this.fps.tick(performance.now());
     this.lastTimings = res.timings;
     this.lastDetections = res.detections;
+    this.warmupStatus(res.warmup);
     if (res.groundTruth && this.gt) {
       for (const g of res.groundTruth) this.gt.add(g);
     }
@@ -397,6 +398,25 @@ export class App {
       this.status(`two tracks shown as ${n.id} are both seen in frame ${n.frame}: the second goes on as ${n.fresh}`, true);
     }
   }
+
+  /**
+   * While the detector learns the scene (a background model's first frames detect nothing),
+   * the status line says so, and says when it is done: empty frames then are not a failure.
+   * @param {{ seen: number, total: number } | null} w
+   */
+  warmupStatus(w) {
+    if (!w) return;
+    if (w.seen < w.total) {
+      this.status(`learning the background: ${w.seen}/${w.total} frames (nothing is detected until it is learnt)…`);
+      this.warming = true;
+    } else if (this.warming) {
+      this.warming = false;
+      this.status(`background learnt from ${w.total} frames: detecting`);
+    }
+  }
+
+  /** Whether the status line shows a warm-up message. */
+  warming = false;
 
   /** Tracks the next frame if it is new, else shows it. */
   async stepForward() {

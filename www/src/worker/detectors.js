@@ -36,12 +36,14 @@ import { ssdDetector } from './detectors/ssd.js';
  *   init: (ctx: { core: Core, width: number, height: number }) => void | Promise<void>,
  *   detect: (frame: DetectorFrame) => Detections | DetectionLists | Promise<Detections | DetectionLists>,
  *   dispose?: () => void,
+ *   warmup?: () => { seen: number, total: number } | null,
  *   tracker?: import('../../pkg/shapetrack.js').TrackerConfig,
  *   classes?: string[],
  * }} Detector  `tracker` holds the tracker settings this detector's output needs (its scores
  *   may not be confidences); the page's own settings override them. `classes` names the class
  *   ids the detector puts on its detections (index = id; '' for ids it never reports), once
- *   `init` is done
+ *   `init` is done. `warmup` says how far a detector that learns the scene first (a background
+ *   model) has got: the page says "learning the background" meanwhile
  *
  * @typedef {(options: Record<string, unknown>) => Detector} DetectorFactory
  */
@@ -108,6 +110,9 @@ function backgroundSubtractor(options) {
     dispose() {
       bg?.free();
       bg = null;
+    },
+    warmup() {
+      return bg ? { seen: bg.warmupSeen, total: bg.warmupFrames } : null;
     },
   };
 }

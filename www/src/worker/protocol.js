@@ -40,7 +40,9 @@
  *   detections: number,
  *   groundTruth: TrackRecord[] | null,
  *   timings: Timings,
- * }} StepResult
+ *   warmup: { seen: number, total: number } | null,
+ * }} StepResult  `warmup`: how far the detector's model has learnt the scene (a background
+ *   model's first frames detect nothing); null for detectors that need no warm-up
  *
  * @typedef {{ type: 'open' } & OpenRequest
  *   | { type: 'attach', canvas: OffscreenCanvas }

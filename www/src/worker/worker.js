@@ -267,6 +267,7 @@ async function step(frame, bitmap, display) {
     detections,
     groundTruth,
     timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
+    warmup: s.detector.warmup?.() ?? null,
   };
 }
 
