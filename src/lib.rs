@@ -12,6 +12,8 @@
 //! - [`detect`]: the adaptive background subtractor and the [`detect::Detector`] trait.
 //! - [`geometry`]: Canny edges and contours, moments, Delaunay shells, GJK, broad phase.
 //! - [`features`]: SIFT, shape context, spatial colour analyser.
+//! - [`follow`]: following one user-given target without (or with) detections; shape-aware
+//!   interpolation between keyframe masks.
 //! - [`region`]: region clusters (thesis Alg. 2).
 //! - [`assign`]: cost matrices and optimal assignment.
 //! - [`motion`]: Kalman filters (constant velocity online, constant acceleration re-linker).
@@ -28,6 +30,7 @@ pub mod assign;
 pub mod detect;
 pub mod eval;
 pub mod features;
+pub mod follow;
 pub mod frame;
 pub mod geometry;
 #[cfg(not(target_arch = "wasm32"))]

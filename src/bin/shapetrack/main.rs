@@ -6,6 +6,7 @@
 mod bench;
 mod eval;
 mod eval_vot;
+mod follow;
 mod grid;
 mod synth;
 mod track;
@@ -35,6 +36,12 @@ enum Cmd {
     Eval(eval::Args),
     /// Evaluate VOT short-term results: accuracy, robustness, EAO.
     EvalVot(eval_vot::Args),
+    /// Follow one target given by a binary PNG mask at one frame, forward and backward;
+    /// write MOTS txt.
+    Follow(follow::Args),
+    /// Run the follower under the VOT anchor and reset protocols; write region files for
+    /// `eval-vot`.
+    Vot(follow::VotArgs),
     /// Write a deterministic synthetic sequence in MOTChallenge layout.
     Synth(synth::Args),
     /// Measure speed (frames per second) of the tracker and its stages.
@@ -65,6 +72,8 @@ fn run() -> ExitCode {
         Cmd::Track(a) => track::run(a),
         Cmd::Eval(a) => eval::run(a),
         Cmd::EvalVot(a) => eval_vot::run(a),
+        Cmd::Follow(a) => follow::run(a),
+        Cmd::Vot(a) => follow::run_vot(a),
         Cmd::Synth(a) => synth::run(a),
         Cmd::Bench(a) => bench::run(a),
         Cmd::Grid(a) => grid::run(a),

@@ -1,0 +1,475 @@
+//! `shapetrack follow`: follow the target given by a binary PNG mask at one frame through a
+//! folder of frames, forward and backward, and write MOTS txt; `shapetrack vot`: run the
+//! follower under the VOT anchor and reset protocols and write the region files `eval-vot`
+//! scores.
+//!
+//! Frames are decoded one at a time in the direction of travel, so memory stays flat over a
+//! long folder for `follow` (`vot` keeps a sequence's frames, since its runs restart often).
+
+use image::RgbImage;
+use shapetrack::detect::background::{BackgroundConfig, BackgroundSubtractor};
+use shapetrack::detect::Detector;
+use shapetrack::eval::vot::{anchors_every, run_anchor_protocol, run_reset_protocol};
+use shapetrack::eval::vot::{overlap, OverlapMethod, ResetParams};
+use shapetrack::follow::{
+    mask_from_bitmap, rasterize_polygon, FollowConfig, FollowError, FollowStep, Follower,
+};
+use shapetrack::frame::{Detection, Frame, Mask};
+use shapetrack::io::motchallenge::write_mots;
+use shapetrack::io::png_masks::{read_png_mask_dir, EightBit};
+use shapetrack::io::rle::Rle;
+use shapetrack::io::vot::{parse_anchor_values, read_regions, write_regions, Direction, Region};
+use shapetrack::io::{image_files, write_text, Record};
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// Detections used while following.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DetectorKind {
+    /// None: the follower alone (keypoints, transform, colour).
+    None,
+    /// The adaptive background subtractor's blobs (static cameras), one model per direction.
+    Auto,
+}
+
+/// Arguments of `shapetrack follow` (other scripts rely on these flags: do not rename).
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of frames (.jpg/.png, sorted by file name, numbered from 1).
+    #[arg(long)]
+    frames: PathBuf,
+    /// Binary PNG mask of the target at --init-frame (non-zero = target), of the frames' size.
+    #[arg(long)]
+    init: PathBuf,
+    /// Frame (1-based) the mask belongs to.
+    #[arg(long, default_value_t = 1)]
+    init_frame: usize,
+    /// Detections to prefer when they agree with the followed mask.
+    #[arg(long, value_enum, default_value = "none")]
+    detector: DetectorKind,
+    /// Output MOTS txt (`frame id class h w rle`; id 1, class 1).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also score the result: a folder of ground-truth PNG masks (non-zero = target), one per
+    /// frame in name order; prints J (mean mask IoU over frames).
+    #[arg(long)]
+    gt: Option<PathBuf>,
+    /// Follower settings as JSON (missing fields take their defaults), e.g.
+    /// `'{"max_side": 480}'`.
+    #[arg(long)]
+    config: Option<String>,
+    /// `copy` writes the initial mask unchanged in every frame: the baseline the follower is
+    /// measured against.
+    #[arg(long, value_enum, default_value = "follow")]
+    method: Method,
+    /// Print each frame's confidence, lost flag, inliers (and IoU with --gt).
+    #[arg(long)]
+    verbose: bool,
+}
+
+fn load_rgb(path: &Path) -> Result<RgbImage, Box<dyn std::error::Error>> {
+    Ok(image::open(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .to_rgb8())
+}
+
+fn frame_of(img: &RgbImage) -> Result<Frame<'_>, Box<dyn std::error::Error>> {
+    Ok(Frame::rgb(img.as_raw(), img.width(), img.height())?)
+}
+
+/// Non-zero in any channel is target.
+fn read_mask_png(path: &Path, width: u32, height: u32) -> Result<Mask, Box<dyn std::error::Error>> {
+    let img = image::open(path)
+        .map_err(|e| format!("--init {}: {e}", path.display()))?
+        .to_rgb8();
+    let bits: Vec<u8> = img
+        .pixels()
+        .map(|p| u8::from(p.0.iter().any(|&v| v != 0)))
+        .collect();
+    Ok(mask_from_bitmap(
+        width,
+        height,
+        img.width(),
+        img.height(),
+        &bits,
+    )?)
+}
+
+/// What `follow` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// The follower.
+    Follow,
+    /// The initial mask copied to every frame (a baseline).
+    Copy,
+}
+
+/// One direction of travel: a follower and, with `--detector auto`, its own background model
+/// (it must see frames in order).
+struct Travel {
+    follower: Follower,
+    detector: Option<BackgroundSubtractor>,
+}
+
+impl Travel {
+    fn new(
+        frame: &Frame<'_>,
+        mask: &Mask,
+        kind: DetectorKind,
+        cfg: &FollowConfig,
+    ) -> Result<Travel, Box<dyn std::error::Error>> {
+        let follower = Follower::new(frame, mask, cfg.clone())?;
+        let detector = match kind {
+            DetectorKind::None => None,
+            DetectorKind::Auto => {
+                let mut d = BackgroundSubtractor::new(BackgroundConfig::default())?;
+                d.detect(frame)?;
+                Some(d)
+            }
+        };
+        Ok(Travel { follower, detector })
+    }
+
+    fn step(
+        &mut self,
+        frame: &Frame<'_>,
+        busy: &mut Duration,
+    ) -> Result<FollowStep, Box<dyn std::error::Error>> {
+        let t = Instant::now();
+        let dets: Vec<Detection> = match &mut self.detector {
+            Some(d) => d.detect(frame)?,
+            None => Vec::new(),
+        };
+        let s = self.follower.step(frame, &dets)?;
+        *busy += t.elapsed();
+        Ok(s)
+    }
+}
+
+/// Runs `shapetrack follow`.
+pub fn run(args: Args) -> crate::CliResult {
+    let files = image_files(&args.frames)?;
+    if files.is_empty() {
+        return Err(format!("--frames {}: no .jpg or .png frames", args.frames.display()).into());
+    }
+    if args.init_frame == 0 || args.init_frame > files.len() {
+        return Err(FollowError::FrameOutOfRange {
+            frame: args.init_frame,
+            len: files.len(),
+        }
+        .into());
+    }
+    let init = args.init_frame - 1;
+    let first = load_rgb(&files[init])?;
+    let (w, h) = first.dimensions();
+    let mask = read_mask_png(&args.init, w, h)?;
+    let frame0 = frame_of(&first)?;
+    let cfg: FollowConfig = match &args.config {
+        Some(j) => serde_json::from_str(j).map_err(|e| format!("--config: {e}"))?,
+        None => FollowConfig::default(),
+    };
+    cfg.validate()?;
+
+    let mut steps: Vec<Option<FollowStep>> = vec![None; files.len()];
+    steps[init] = Some(FollowStep {
+        mask: mask.clone(),
+        confidence: 1.0,
+        lost: false,
+        stopped: false,
+        inliers: 0,
+        from_detection: false,
+    });
+    let mut busy = Duration::ZERO;
+    let forward: Vec<usize> = (init + 1..files.len()).collect();
+    let backward: Vec<usize> = (0..init).rev().collect();
+    for order in [forward, backward] {
+        let mut travel = Travel::new(&frame0, &mask, args.detector, &cfg)?;
+        for i in order {
+            if args.method == Method::Copy {
+                steps[i] = steps[init].clone();
+                continue;
+            }
+            if travel.follower.stopped() {
+                break;
+            }
+            let img = load_rgb(&files[i])?;
+            if img.dimensions() != (w, h) {
+                return Err(format!(
+                    "{}: {}x{}, but the frames are {w}x{h}",
+                    files[i].display(),
+                    img.width(),
+                    img.height()
+                )
+                .into());
+            }
+            steps[i] = Some(travel.step(&frame_of(&img)?, &mut busy)?);
+        }
+    }
+
+    let mut records = Vec::new();
+    let (mut lost, mut written) = (0, 0);
+    for (i, s) in steps.iter().enumerate() {
+        let Some(s) = s else { continue };
+        lost += usize::from(s.lost);
+        if s.mask.is_empty() {
+            continue;
+        }
+        written += 1;
+        let mut r = Record::from_box(i as u32 + 1, 1, s.mask.bbox());
+        r.class = 1;
+        r.score = s.confidence;
+        r.mask = Some(Rle::from_mask(&s.mask, w, h));
+        records.push(r);
+    }
+    write_text(&args.out, &write_mots(&records))?;
+    let followed = files.len() - 1;
+    eprintln!(
+        "followed {followed} frames from frame {}: {written} masks written, {lost} lost; \
+         {:.1} frames/s (follower{}; decoding excluded)",
+        args.init_frame,
+        followed as f64 / busy.as_secs_f64().max(1e-9),
+        if args.detector == DetectorKind::Auto {
+            " + detector"
+        } else {
+            ""
+        }
+    );
+    if let Some(gt) = &args.gt {
+        let j = score_j(gt, &steps, w, h, args.verbose)?;
+        println!("J {j:.4}");
+    }
+    Ok(())
+}
+
+/// Mean mask IoU over frames against a folder of ground-truth PNG masks (a frame where both
+/// are empty counts 1, as DAVIS scores it).
+fn score_j(
+    gt: &Path,
+    steps: &[Option<FollowStep>],
+    w: u32,
+    h: u32,
+    verbose: bool,
+) -> Result<f64, Box<dyn std::error::Error>> {
+    let seq = read_png_mask_dir(gt, EightBit::Binary { id: 1 })?;
+    if seq.num_frames as usize != steps.len() || (seq.width, seq.height) != (w, h) {
+        return Err(format!(
+            "--gt {}: {} masks of {}x{}, expected {} of {w}x{h}",
+            gt.display(),
+            seq.num_frames,
+            seq.width,
+            seq.height,
+            steps.len()
+        )
+        .into());
+    }
+    let mut sum = 0.0;
+    for (i, s) in steps.iter().enumerate() {
+        let truth = seq
+            .records
+            .iter()
+            .filter(|r| r.frame as usize == i + 1)
+            .find_map(Record::mask_bitmap)
+            .unwrap_or_else(Mask::empty);
+        let ours = s.as_ref().map_or_else(Mask::empty, |s| s.mask.clone());
+        let iou = if truth.is_empty() && ours.is_empty() {
+            1.0
+        } else {
+            truth.iou(&ours)
+        };
+        if verbose {
+            if let Some(s) = s {
+                println!(
+                    "frame {:4}  iou {iou:.3}  conf {:.3}  lost {}  inliers {:3}  area {} / {}",
+                    i + 1,
+                    s.confidence,
+                    u8::from(s.lost),
+                    s.inliers,
+                    s.mask.area(),
+                    truth.area()
+                );
+            }
+        }
+        sum += iou;
+    }
+    Ok(sum / steps.len() as f64)
+}
+
+/// VOT protocols to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum VotProtocol {
+    /// VOT2020 anchors (multi-start).
+    Anchor,
+    /// VOT2016–2019 reset-based.
+    Reset,
+    /// Both.
+    Both,
+}
+
+/// Arguments of `shapetrack vot`.
+#[derive(clap::Args)]
+pub struct VotArgs {
+    /// VOT sequence folder: frames (.jpg/.png) and groundtruth.txt (anchor.value if present).
+    #[arg(long)]
+    seq: PathBuf,
+    /// Output folder for the region files (`<seq>_<anchor:08>.txt`, `<seq>_001.txt`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Protocol(s).
+    #[arg(long, value_enum, default_value = "both")]
+    protocol: VotProtocol,
+    /// Anchor spacing when the folder has no anchor.value.
+    #[arg(long, default_value_t = 50)]
+    anchor_spacing: usize,
+    /// Sequence name in the file names (default: the folder's name).
+    #[arg(long)]
+    sequence: Option<String>,
+}
+
+fn region_mask(r: &Region, w: u32, h: u32) -> Mask {
+    match r {
+        Region::Rectangle(b) => Mask::from_bbox(b).clipped(w, h).tight(),
+        Region::Polygon(p) => rasterize_polygon(p, w, h),
+        Region::Mask(m) => m.clipped(w, h).tight(),
+        Region::Special(_) => Mask::empty(),
+    }
+}
+
+/// Follows from `start` through `order`, one region per frame; stops early once the follower
+/// stops (`until_stop`) or fills the rest with empty masks.
+fn follow_run(
+    imgs: &[RgbImage],
+    start: usize,
+    init: &Region,
+    order: impl Iterator<Item = usize>,
+    until_stop: bool,
+    supervisor: Option<(&[Region], (u32, u32))>,
+    stats: &mut (Duration, usize),
+) -> Result<Vec<Region>, Box<dyn std::error::Error>> {
+    let (w, h) = imgs[start].dimensions();
+    let mask = region_mask(init, w, h);
+    let mut out = Vec::new();
+    let Ok(mut f) = Follower::new(&frame_of(&imgs[start])?, &mask, FollowConfig::default()) else {
+        // An empty or off-frame gt region: nothing to follow.
+        out.extend(order.map(|_| Region::Mask(Mask::empty())));
+        return Ok(out);
+    };
+    for i in order {
+        if f.stopped() {
+            if until_stop {
+                break;
+            }
+            out.push(Region::Mask(Mask::empty()));
+            continue;
+        }
+        let t = Instant::now();
+        let s = f.step(&frame_of(&imgs[i])?, &[])?;
+        stats.0 += t.elapsed();
+        stats.1 += 1;
+        let r = Region::Mask(s.mask);
+        // Under the reset protocol the run ends at the first frame without overlap: the
+        // supervisor re-initialises there, so following on would be wasted work.
+        let failed = supervisor
+            .is_some_and(|(gt, b)| overlap(&r, &gt[i], Some(b), OverlapMethod::Toolkit) <= 0.0);
+        out.push(r);
+        if failed {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// Runs `shapetrack vot`.
+pub fn run_vot(args: VotArgs) -> crate::CliResult {
+    let gt = read_regions(&args.seq.join("groundtruth.txt"))?;
+    let files = image_files(&args.seq)?;
+    if files.is_empty() || gt.len() != files.len() {
+        return Err(format!(
+            "{}: {} frames but {} ground-truth lines",
+            args.seq.display(),
+            files.len(),
+            gt.len()
+        )
+        .into());
+    }
+    let imgs = files
+        .iter()
+        .map(|p| load_rgb(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (w, h) = imgs[0].dimensions();
+    if imgs.iter().any(|i| i.dimensions() != (w, h)) {
+        return Err("frames differ in size".into());
+    }
+    let seq = args.sequence.clone().unwrap_or_else(|| {
+        args.seq
+            .canonicalize()
+            .ok()
+            .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .unwrap_or_else(|| "sequence".into())
+    });
+    std::fs::create_dir_all(&args.out)?;
+    let n = imgs.len();
+    let stats = RefCell::new((Duration::ZERO, 0usize));
+    let err: RefCell<Option<String>> = RefCell::new(None);
+    let run = |start: usize, init: &Region, order: Box<dyn Iterator<Item = usize>>, stop| {
+        follow_run(
+            &imgs,
+            start,
+            init,
+            order,
+            stop,
+            stop.then_some((&gt[..], (w, h))),
+            &mut stats.borrow_mut(),
+        )
+        .unwrap_or_else(|e| {
+            err.borrow_mut().get_or_insert(e.to_string());
+            Vec::new()
+        })
+    };
+    if matches!(args.protocol, VotProtocol::Anchor | VotProtocol::Both) {
+        let af = args.seq.join("anchor.value");
+        let anchors = if af.exists() {
+            parse_anchor_values(&shapetrack::io::read_text(&af)?, &af.display().to_string())?
+        } else {
+            anchors_every(n, args.anchor_spacing)
+        };
+        let runs = run_anchor_protocol(n, &gt, &anchors, |start, init, dir| {
+            let order: Box<dyn Iterator<Item = usize>> = match dir {
+                Direction::Forward => Box::new(start + 1..n),
+                Direction::Backward => Box::new((0..start).rev()),
+            };
+            run(start, init, order, false)
+        })?;
+        if let Some(e) = err.borrow().as_ref() {
+            return Err(e.clone().into());
+        }
+        for (a, r) in anchors.iter().zip(&runs) {
+            let p = args.out.join(format!("{seq}_{:08}.txt", a.frame));
+            write_text(&p, &write_regions(r))?;
+        }
+    }
+    if matches!(args.protocol, VotProtocol::Reset | VotProtocol::Both) {
+        // Failures are judged as `eval-vot` judges them (toolkit overlap, clipped to the image).
+        let params = ResetParams {
+            bounds: Some((w, h)),
+            method: OverlapMethod::Toolkit,
+            ..ResetParams::default()
+        };
+        let traj = run_reset_protocol(&gt, &params, |start, init| {
+            run(start, init, Box::new(start + 1..n), true)
+        });
+        if let Some(e) = err.borrow().as_ref() {
+            return Err(e.clone().into());
+        }
+        write_text(
+            &args.out.join(format!("{seq}_001.txt")),
+            &write_regions(&traj),
+        )?;
+    }
+    let (busy, fr) = *stats.borrow();
+    eprintln!(
+        "{fr} frames followed, {:.1} frames/s (follower only)",
+        fr as f64 / busy.as_secs_f64().max(1e-9)
+    );
+    Ok(())
+}

@@ -1,0 +1,326 @@
+//! Following a user-given shape (issue 12): the core follower on a generated sequence, shape-
+//! aware interpolation against a box lerp, the `follow` CLI's MOTS output and its errors.
+//! Everything is generated here (small frames), so each test takes a few seconds in debug.
+
+use shapetrack::follow::{
+    follow_sequence, interpolate_masks, rasterize_polygon, FollowConfig, FollowError,
+};
+use shapetrack::frame::{BBox, Frame, Mask, Point};
+use shapetrack::io::motchallenge::parse_mots;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const W: u32 = 160;
+const H: u32 = 120;
+
+/// A repeatable value in [0, 1) for integer cell coordinates (a hash, not an RNG, so any
+/// pixel can be rendered independently).
+fn hash(x: i64, y: i64, salt: u64) -> f64 {
+    let mut h = (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+        ^ salt.wrapping_mul(0x1656_67B1_9E37_79F9);
+    h ^= h >> 31;
+    h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    h ^= h >> 29;
+    (h >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The target's pose in frame `i`: centre and angle (radians).
+fn pose(i: usize) -> (Point, f64) {
+    let t = i as f64;
+    (Point::new(45.0 + 3.0 * t, 55.0 + 1.2 * t), 0.05 * t)
+}
+
+/// Half sizes of the target rectangle.
+const HW: f64 = 22.0;
+const HH: f64 = 14.0;
+
+/// Object coordinates of frame pixel centre `(x, y)` in frame `i`.
+fn to_object(x: f64, y: f64, i: usize) -> Point {
+    let (c, a) = pose(i);
+    let (dx, dy) = (x - c.x, y - c.y);
+    Point::new(a.cos() * dx + a.sin() * dy, -a.sin() * dx + a.cos() * dy)
+}
+
+/// Frame `i`: a reddish, blotchy rectangle (texture fixed to the object, so it moves and
+/// turns with it) over a blue-green blotchy background that stays put.
+fn render(i: usize) -> (Vec<u8>, Mask) {
+    let mut rgb = Vec::with_capacity((W * H * 3) as usize);
+    let mut truth = vec![0u8; (W * H) as usize];
+    for y in 0..H {
+        for x in 0..W {
+            let o = to_object(x as f64 + 0.5, y as f64 + 0.5, i);
+            let inside = o.x.abs() < HW && o.y.abs() < HH;
+            let px = if inside {
+                truth[(y * W + x) as usize] = 1;
+                let v = hash((o.x / 4.0).floor() as i64, (o.y / 4.0).floor() as i64, 7);
+                [
+                    (150.0 + 100.0 * v) as u8,
+                    (40.0 + 120.0 * v) as u8,
+                    (30.0 + 60.0 * v) as u8,
+                ]
+            } else {
+                let v = hash((x / 5) as i64, (y / 5) as i64, 3);
+                [
+                    (20.0 + 60.0 * v) as u8,
+                    (70.0 + 120.0 * v) as u8,
+                    (90.0 + 130.0 * v) as u8,
+                ]
+            };
+            rgb.extend_from_slice(&px);
+        }
+    }
+    (rgb, Mask::from_full(W, H, &truth).unwrap())
+}
+
+#[test]
+fn follower_keeps_a_moving_turning_shape_that_copying_loses() {
+    let n = 16;
+    let scenes: Vec<(Vec<u8>, Mask)> = (0..n).map(render).collect();
+    let frames: Vec<Frame> = scenes
+        .iter()
+        .map(|(rgb, _)| Frame::rgb(rgb, W, H).unwrap())
+        .collect();
+    // Start in the middle so both directions are exercised.
+    let init = 5;
+    let steps = follow_sequence(
+        &frames,
+        init,
+        &scenes[init].1,
+        None,
+        &FollowConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(steps.len(), n);
+    let ious: Vec<f64> = steps
+        .iter()
+        .zip(&scenes)
+        .map(|(s, (_, t))| s.mask.iou(t))
+        .collect();
+    let copy: Vec<f64> = scenes.iter().map(|(_, t)| scenes[init].1.iou(t)).collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let worst = ious.iter().copied().fold(1.0, f64::min);
+    assert!(
+        worst >= 0.7 && mean(&ious) >= 0.8,
+        "follower IoU per frame {ious:.3?}"
+    );
+    // Copying the first mask: about half overlap on average, none at the far ends.
+    let copy_worst = copy.iter().copied().fold(1.0, f64::min);
+    assert!(
+        mean(&copy) < 0.55 && copy_worst < 0.2 && mean(&ious) > mean(&copy) + 0.25,
+        "copy baseline {copy:.3?}, follower {ious:.3?}"
+    );
+    for s in &steps {
+        assert!(!s.lost && !s.stopped && (0.0..=1.0).contains(&s.confidence));
+    }
+}
+
+#[test]
+fn follower_rejects_bad_input_with_typed_errors() {
+    let (rgb, truth) = render(0);
+    let f = Frame::rgb(&rgb, W, H).unwrap();
+    let frames = [f];
+    let cfg = FollowConfig::default();
+    assert_eq!(
+        follow_sequence(&frames, 0, &Mask::empty(), None, &cfg).unwrap_err(),
+        FollowError::EmptyMask
+    );
+    assert!(matches!(
+        follow_sequence(&frames, 3, &truth, None, &cfg),
+        Err(FollowError::FrameOutOfRange { frame: 3, len: 1 })
+    ));
+    assert_eq!(
+        follow_sequence(&[], 0, &truth, None, &cfg).unwrap_err(),
+        FollowError::NoFrames
+    );
+    let outside = truth.translated(W as i32, 0);
+    assert!(matches!(
+        follow_sequence(&frames, 0, &outside, None, &cfg),
+        Err(FollowError::MaskOutside { .. })
+    ));
+    assert!(matches!(
+        shapetrack::follow::mask_from_bitmap(W, H, W - 1, H, &vec![1; ((W - 1) * H) as usize]),
+        Err(FollowError::MaskSize { .. })
+    ));
+    let small = vec![0u8; 30 * 20 * 3];
+    let other = Frame::rgb(&small, 30, 20).unwrap();
+    assert!(matches!(
+        follow_sequence(&[frames[0], other], 0, &truth, None, &cfg),
+        Err(FollowError::FrameSize { index: 1, .. })
+    ));
+}
+
+/// An L shape at `centre`, `scale`, turned by `angle`.
+fn l_shape(centre: Point, scale: f64, angle: f64) -> Vec<Point> {
+    let pts = [
+        (-1.0, -1.0),
+        (0.0, -1.0),
+        (0.0, 0.5),
+        (1.2, 0.5),
+        (1.2, 1.0),
+        (-1.0, 1.0),
+    ];
+    pts.iter()
+        .map(|&(x, y)| {
+            let (x, y) = (x * scale, y * scale);
+            Point::new(
+                centre.x + angle.cos() * x - angle.sin() * y,
+                centre.y + angle.sin() * x + angle.cos() * y,
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn interpolated_midpoint_beats_a_box_lerp() {
+    let (w, h) = (200, 160);
+    let a = rasterize_polygon(&l_shape(Point::new(50.0, 60.0), 20.0, 0.0), w, h);
+    let b = rasterize_polygon(&l_shape(Point::new(140.0, 90.0), 30.0, 0.4), w, h);
+    let truth = rasterize_polygon(&l_shape(Point::new(95.0, 75.0), 25.0, 0.2), w, h);
+    let mid = interpolate_masks(&a, &b, 0.5, w, h).unwrap();
+    let (ba, bb) = (a.bbox(), b.bbox());
+    let lerp = BBox::from_xyxy(
+        0.5 * (ba.x + bb.x),
+        0.5 * (ba.y + bb.y),
+        0.5 * (ba.x2() + bb.x2()),
+        0.5 * (ba.y2() + bb.y2()),
+    );
+    let boxed = Mask::from_bbox(&lerp);
+    let (ours, theirs) = (mid.iou(&truth), boxed.iou(&truth));
+    assert!(ours >= 0.85, "interpolated IoU {ours:.3}");
+    assert!(
+        ours > theirs + 0.1,
+        "ours {ours:.3} vs box lerp {theirs:.3}"
+    );
+    // The ends are the keyframes themselves; bad positions and empty keyframes are errors.
+    assert_eq!(interpolate_masks(&a, &b, 0.0, w, h).unwrap(), a.tight());
+    assert!(interpolate_masks(&a, &b, 1.5, w, h).is_err());
+    assert!(interpolate_masks(&Mask::empty(), &b, 0.5, w, h).is_err());
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("shapetrack-follow-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write_png_gray(path: &Path, w: u32, h: u32, data: Vec<u8>) {
+    image::GrayImage::from_raw(w, h, data)
+        .unwrap()
+        .save(path)
+        .unwrap();
+}
+
+fn follow_cli(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_shapetrack"))
+        .arg("follow")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn cli_writes_mots_that_reads_back_and_refuses_bad_input() {
+    let dir = scratch("cli");
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let n = 6;
+    let mut truth = Vec::new();
+    for i in 0..n {
+        let (rgb, t) = render(i);
+        image::RgbImage::from_raw(W, H, rgb)
+            .unwrap()
+            .save(frames.join(format!("{:03}.png", i + 1)))
+            .unwrap();
+        truth.push(t);
+    }
+    let init = dir.join("init.png");
+    write_png_gray(
+        &init,
+        W,
+        H,
+        truth[2].to_full(W, H).iter().map(|v| v * 255).collect(),
+    );
+    let out = dir.join("track.txt");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (fr, ini, o) = (s(&frames), s(&init), s(&out));
+    let res = follow_cli(&[
+        "--frames",
+        &fr,
+        "--init",
+        &ini,
+        "--init-frame",
+        "3",
+        "--out",
+        &o,
+    ]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let recs = parse_mots(&std::fs::read_to_string(&out).unwrap(), "track.txt").unwrap();
+    assert_eq!(recs.len(), n);
+    for (k, r) in recs.iter().enumerate() {
+        assert_eq!((r.frame, r.id), (k as u32 + 1, 1));
+        let m = r.mask_bitmap().unwrap();
+        assert!(
+            m.iou(&truth[k]) > 0.6,
+            "frame {} IoU {}",
+            k + 1,
+            m.iou(&truth[k])
+        );
+    }
+
+    // Bad input: a clear error, a failure exit, no panic.
+    let empty = dir.join("empty.png");
+    write_png_gray(&empty, W, H, vec![0; (W * H) as usize]);
+    let wrong = dir.join("wrong.png");
+    write_png_gray(&wrong, W / 2, H, vec![255; (W / 2 * H) as usize]);
+    let no_frames = dir.join("none");
+    std::fs::create_dir_all(&no_frames).unwrap();
+    let (em, wr, nf) = (s(&empty), s(&wrong), s(&no_frames));
+    let cases: [(&[&str], &str); 5] = [
+        (&["--frames", &fr, "--init", &em, "--out", &o], "empty"),
+        (&["--frames", &fr, "--init", &wr, "--out", &o], "80x120"),
+        (
+            &[
+                "--frames",
+                &fr,
+                "--init",
+                &ini,
+                "--init-frame",
+                "0",
+                "--out",
+                &o,
+            ],
+            "out of range",
+        ),
+        (
+            &[
+                "--frames",
+                &fr,
+                "--init",
+                &ini,
+                "--init-frame",
+                "7",
+                "--out",
+                &o,
+            ],
+            "out of range",
+        ),
+        (
+            &["--frames", &nf, "--init", &ini, "--out", &o],
+            "no .jpg or .png",
+        ),
+    ];
+    for (args, expect) in cases {
+        let res = follow_cli(args);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(!res.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
