@@ -1,17 +1,25 @@
 //! Detection: the [`Detector`] interface and the default detector, the thesis' adaptive
 //! background subtractor ([`BackgroundSubtractor`], §3.2.1 eq. 1–2), with the binary
-//! morphology and connected-component labelling it is built from.
+//! morphology and connected-component labelling it is built from; its camera-motion-compensated
+//! variant for moving cameras ([`MovingCameraDetector`], with [`CameraJudge`] to tell the two
+//! kinds of footage apart); and box → mask refinement ([`refine_box`], GrabCut-like, on a
+//! hand-written min-cut in [`maxflow`]).
 //!
 //! Any other detector (an in-browser model, detections read from files) plugs into the tracker
 //! by implementing [`Detector`] or by handing over its `Vec<Detection>` directly.
 
 pub mod background;
 pub mod components;
+pub mod maxflow;
 pub mod morphology;
+pub mod moving;
+pub mod refine;
 
 pub use background::{BackgroundConfig, BackgroundSubtractor, ShadowConfig, UpdatePolicy};
 pub use components::{Blob, Components, Connectivity, Run};
 pub use morphology::Morphology;
+pub use moving::{CameraJudge, CameraMotion, MovingCameraDetector, MovingConfig};
+pub use refine::{refine_box, BoxRefiner, RefineConfig};
 
 use crate::frame::{Detection, Frame};
 use thiserror::Error;
@@ -43,6 +51,12 @@ pub enum DetectError {
         value: f64,
         /// What is allowed.
         reason: &'static str,
+    },
+    /// The colour models of a box refinement could not be built.
+    #[error("box refinement failed: {reason}")]
+    Refine {
+        /// What failed.
+        reason: String,
     },
     /// A bitmap does not have `width·height` entries.
     #[error("bitmap has {len} entries, expected {width}x{height}")]

@@ -1,9 +1,12 @@
-//! The `shapetrack` command-line tool: track, evaluate, generate synthetic scenes, benchmark.
+//! The `shapetrack` command-line tool: track, detect, evaluate, generate synthetic scenes,
+//! benchmark.
 //!
 //! Each subcommand lives in its own module with its `Args` and `run`; flags other tools rely on
 //! are listed in the README and must not change.
 
 mod bench;
+mod detect;
+mod detect_eval;
 mod eval;
 mod eval_vot;
 mod follow;
@@ -44,6 +47,10 @@ enum Cmd {
     Vot(follow::VotArgs),
     /// Write a deterministic synthetic sequence in MOTChallenge layout.
     Synth(synth::Args),
+    /// Run a detector over a folder of frames and write its masks as MOTS txt.
+    Detect(detect::Args),
+    /// Mask quality (J) and speed of each detector on DAVIS-layout sequences.
+    DetectEval(detect_eval::Args),
     /// Measure speed (frames per second) of the tracker and its stages.
     Bench(bench::Args),
     /// The robustness grid: datasets × detector models × trackers.
@@ -75,6 +82,8 @@ fn run() -> ExitCode {
         Cmd::Follow(a) => follow::run(a),
         Cmd::Vot(a) => follow::run_vot(a),
         Cmd::Synth(a) => synth::run(a),
+        Cmd::Detect(a) => detect::run(a),
+        Cmd::DetectEval(a) => detect_eval::run(a),
         Cmd::Bench(a) => bench::run(a),
         Cmd::Grid(a) => grid::run(a),
     };

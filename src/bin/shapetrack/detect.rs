@@ -1,0 +1,282 @@
+//! `shapetrack detect`: runs a detector over a folder of frames and writes MOTS txt.
+//!
+//! ```text
+//! shapetrack detect --frames DIR [--detector auto|background|moving|refine] [--boxes BOXES.txt]
+//!                   --out MASKS.txt
+//! ```
+//!
+//! Frames are the folder's `.jpg`/`.jpeg`/`.png` files in name order, numbered from 1. Each
+//! detection becomes one line `frame id class height width rle` with id `-1` (detections carry
+//! no identity, as in `synth`'s `det_mots.txt`) and the box's class, `-1` when unknown.
+//! `--boxes` (MOTChallenge txt) gives the boxes to refine into masks. Other scripts rely on
+//! exactly these flags.
+
+use clap::ValueEnum;
+use shapetrack::detect::{
+    BackgroundConfig, BackgroundSubtractor, BoxRefiner, CameraJudge, DetectError, Detector,
+    MovingCameraDetector, MovingConfig, RefineConfig,
+};
+use shapetrack::io::motchallenge::{parse_mot, write_mots};
+use shapetrack::io::{image_files, read_text, write_text, IoError, Record, Rle};
+use shapetrack::{Detection, Frame};
+use std::path::{Path, PathBuf};
+
+/// Which detector runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Kind {
+    /// `refine` when boxes are given; otherwise `background` or `moving`, chosen from how much
+    /// the camera moves over the first frames.
+    Auto,
+    /// The thesis' adaptive background subtractor (static camera).
+    Background,
+    /// Camera-motion-compensated background subtraction with box refinement (moving camera).
+    Moving,
+    /// Refines the `--boxes` into masks (GrabCut-like colour + edge segmentation).
+    Refine,
+}
+
+/// Arguments of `shapetrack detect`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of frames (.jpg/.png), sorted by file name, numbered from 1.
+    #[arg(long)]
+    frames: PathBuf,
+    /// Detector.
+    #[arg(long, value_enum, default_value_t = Kind::Auto)]
+    detector: Kind,
+    /// MOTChallenge boxes (frame,id,x,y,w,h,score,...) to refine into masks.
+    #[arg(long)]
+    boxes: Option<PathBuf>,
+    /// MOTS txt output (frame id class height width rle).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Frames the auto choice watches before deciding between a static and a moving camera.
+pub const JUDGE_FRAMES: usize = 5;
+
+/// Errors of the detect command that are not I/O or detector errors.
+#[derive(Debug, thiserror::Error)]
+pub enum DetectCliError {
+    /// The frame folder has no image.
+    #[error("{dir}: no .jpg or .png frames in this folder")]
+    NoFrames {
+        /// The folder.
+        dir: String,
+    },
+    /// `--detector refine` without `--boxes`.
+    #[error("--detector refine needs --boxes BOXES.txt")]
+    RefineWithoutBoxes,
+    /// `--boxes` with a detector that finds its own objects.
+    #[error("--boxes can only be used with --detector refine or auto")]
+    BoxesNotUsed,
+    /// Frames of different sizes in one folder.
+    #[error("{file}: frame is {width}x{height}, the first frame was {first_width}x{first_height}")]
+    SizeChanged {
+        /// The frame.
+        file: String,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// The first frame's width.
+        first_width: u32,
+        /// The first frame's height.
+        first_height: u32,
+    },
+    /// `--out` is one of the inputs.
+    #[error("--out {0} would overwrite an input")]
+    OutIsInput(String),
+    /// A detector failed on a frame.
+    #[error("frame {frame}: {source}")]
+    Detect {
+        /// 1-based frame number.
+        frame: u32,
+        /// The detector's error.
+        #[source]
+        source: DetectError,
+    },
+}
+
+/// Loads a frame as RGB8, naming the file on failure.
+pub fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
+    image::open(path)
+        .map(|i| i.to_rgb8())
+        .map_err(|e| IoError::Image {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        })
+}
+
+/// A detector chosen by [`Kind`], run frame by frame.
+pub enum Runner {
+    /// Still deciding (auto without boxes): both detectors learn; the moving one reports.
+    Judging {
+        judge: CameraJudge,
+        background: Box<BackgroundSubtractor>,
+        moving: Box<MovingCameraDetector>,
+    },
+    /// Static camera.
+    Background(Box<BackgroundSubtractor>),
+    /// Moving camera.
+    Moving(Box<MovingCameraDetector>),
+    /// Box refinement; the boxes of every frame, index = frame number.
+    Refine(BoxRefiner, Vec<Vec<Detection>>),
+}
+
+impl Runner {
+    /// The detector for `kind`; `boxes` are the per-frame boxes (refine, auto).
+    pub fn new(
+        kind: Kind,
+        boxes: Option<Vec<Vec<Detection>>>,
+    ) -> Result<Runner, Box<dyn std::error::Error>> {
+        let bg = || BackgroundSubtractor::new(BackgroundConfig::default()).map(Box::new);
+        let mv = || MovingCameraDetector::new(MovingConfig::default()).map(Box::new);
+        Ok(match (kind, boxes) {
+            (Kind::Refine | Kind::Auto, Some(b)) => {
+                Runner::Refine(BoxRefiner::new(RefineConfig::default())?, b)
+            }
+            (Kind::Refine, None) => return Err(DetectCliError::RefineWithoutBoxes.into()),
+            (_, Some(_)) => return Err(DetectCliError::BoxesNotUsed.into()),
+            (Kind::Background, None) => Runner::Background(bg()?),
+            (Kind::Moving, None) => Runner::Moving(mv()?),
+            (Kind::Auto, None) => Runner::Judging {
+                judge: CameraJudge::new(),
+                background: bg()?,
+                moving: mv()?,
+            },
+        })
+    }
+
+    /// The name of the detector running now (auto says what it chose once it has).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Runner::Judging { .. } => "auto (judging the camera)",
+            Runner::Background(_) => "background",
+            Runner::Moving(_) => "moving",
+            Runner::Refine(..) => "refine",
+        }
+    }
+
+    /// The detections of frame `n` (1-based).
+    pub fn detect(&mut self, n: u32, frame: &Frame) -> Result<Vec<Detection>, DetectError> {
+        match self {
+            Runner::Background(d) => d.detect(frame),
+            Runner::Moving(d) => d.detect(frame),
+            Runner::Refine(r, boxes) => {
+                let b = boxes.get(n as usize).cloned().unwrap_or_default();
+                r.set_boxes(b);
+                r.detect(frame)
+            }
+            Runner::Judging {
+                judge,
+                background,
+                moving,
+            } => {
+                judge.observe(frame);
+                background.detect(frame)?;
+                let out = moving.detect(frame)?;
+                if judge.pairs() + 1 >= JUDGE_FRAMES {
+                    let next = if judge.moving() == Some(false) {
+                        Runner::Background(std::mem::replace(
+                            background,
+                            Box::new(BackgroundSubtractor::new(BackgroundConfig::default())?),
+                        ))
+                    } else {
+                        Runner::Moving(std::mem::replace(
+                            moving,
+                            Box::new(MovingCameraDetector::new(MovingConfig::default())?),
+                        ))
+                    };
+                    *self = next;
+                }
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// Reads MOTChallenge boxes into per-frame detections (index = frame number).
+pub fn read_boxes(path: &Path, frames: usize) -> Result<Vec<Vec<Detection>>, IoError> {
+    let file = path.display().to_string();
+    let records = parse_mot(&read_text(path)?, &file)?;
+    let mut out = vec![Vec::new(); frames + 1];
+    for r in records {
+        if let Some(v) = out.get_mut(r.frame as usize) {
+            let mut d = Detection::from_box(r.bbox, r.score);
+            d.class = r.class;
+            v.push(d);
+        }
+    }
+    Ok(out)
+}
+
+/// MOTS records of one frame's detections (id -1: detections carry no identity).
+pub fn records(n: u32, dets: &[Detection], w: u32, h: u32) -> Vec<Record> {
+    dets.iter()
+        .filter_map(|d| {
+            let m = d.mask.as_ref()?;
+            let mut r = Record::from_box(n, -1, d.bbox);
+            r.score = d.score;
+            r.class = d.class;
+            r.mask = Some(Rle::from_mask(m, w, h));
+            Some(r)
+        })
+        .collect()
+}
+
+pub fn run(args: Args) -> crate::CliResult {
+    let files = image_files(&args.frames)?;
+    if files.is_empty() {
+        return Err(DetectCliError::NoFrames {
+            dir: args.frames.display().to_string(),
+        }
+        .into());
+    }
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    };
+    if files.iter().any(|f| same(f, &args.out))
+        || args.boxes.as_deref().is_some_and(|b| same(b, &args.out))
+    {
+        return Err(DetectCliError::OutIsInput(args.out.display().to_string()).into());
+    }
+    let boxes = args
+        .boxes
+        .as_deref()
+        .map(|p| read_boxes(p, files.len()))
+        .transpose()?;
+    let mut runner = Runner::new(args.detector, boxes)?;
+    let mut out = Vec::new();
+    let mut first: Option<(u32, u32)> = None;
+    for (i, path) in files.iter().enumerate() {
+        let n = i as u32 + 1;
+        let img = load_rgb(path)?;
+        let (w, h) = img.dimensions();
+        let (fw, fh) = *first.get_or_insert((w, h));
+        if (w, h) != (fw, fh) {
+            return Err(DetectCliError::SizeChanged {
+                file: path.display().to_string(),
+                width: w,
+                height: h,
+                first_width: fw,
+                first_height: fh,
+            }
+            .into());
+        }
+        let frame = Frame::rgb(img.as_raw(), w, h)?;
+        let dets = runner
+            .detect(n, &frame)
+            .map_err(|source| DetectCliError::Detect { frame: n, source })?;
+        out.extend(records(n, &dets, w, h));
+    }
+    write_text(&args.out, &write_mots(&out))?;
+    eprintln!(
+        "detect: {} frames, {} masks, detector {}",
+        files.len(),
+        out.len(),
+        runner.name()
+    );
+    Ok(())
+}

@@ -1,0 +1,663 @@
+//! Box → mask refinement: a GrabCut-like colour + edge segmentation inside a detector's box.
+//!
+//! Per box:
+//!
+//! 1. **Working crop.** The box grown by a ring ([`RefineConfig::ring`]) is cut out of the frame
+//!    and area-averaged down so that its longer side is at most [`RefineConfig::max_side`]
+//!    pixels: the cost per box is bounded whatever the box size (at the default 80 px a crop has
+//!    at most 6,400 pixels).
+//! 2. **Colour models.** The ring outside the box is background (a hard constraint); the box
+//!    is unknown. The colour analyser's k-means ([`joint_palette`], one palette for the ring and
+//!    the box, seeded) labels every crop pixel; each palette colour becomes one Gaussian of a
+//!    background mixture (fitted on the ring's pixels of that colour) and of a foreground
+//!    mixture (fitted on the box pixels, weighted towards the box centre, where the object most
+//!    likely is).
+//! 3. **Min-cut.** Unary costs are the mixtures' negative log-likelihoods with a weak foreground
+//!    bonus that falls off from the box centre; pairwise costs between 8-neighbours are GrabCut's
+//!    contrast-sensitive `γ·exp(−β‖zᵢ − zⱼ‖²)/dist` (so the cut follows colour edges). The cut
+//!    is [`FlowGraph`]'s (Dinic, written by hand: see ARCHITECTURE.md).
+//! 4. **Iterate.** Each mixture is refitted on the pixels the cut gave it (each pixel to its most
+//!    likely Gaussian), and the cut is solved again, [`RefineConfig::iterations`] times.
+//! 5. **Clean-up and output.** Components much smaller than the largest are dropped (stray
+//!    bits of background that happened to match the object's colours), and the crop's labels
+//!    are upsampled bilinearly to the frame's pixels inside the box.
+
+use super::components::{Components, Connectivity};
+use super::maxflow::{FlowGraph, INFINITE};
+use super::{DetectError, Detector};
+use crate::features::color::{joint_palette, ColorConfig, ColorSample};
+use crate::frame::{BBox, Detection, Frame, Mask, Point};
+use serde::{Deserialize, Serialize};
+
+/// Settings of the box refinement.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RefineConfig {
+    /// Longest side of the working crop in pixels, ring included (the per-box cost bound).
+    /// Default `80`.
+    pub max_side: u32,
+    /// Width of the background ring around the box, as a fraction of the box's longer side
+    /// (at least 2 working pixels). Default `0.08`.
+    pub ring: f64,
+    /// Palette size of the k-means that starts the colour models. Default `8`.
+    pub clusters: usize,
+    /// Cut → refit rounds. Default `2` (further rounds gained < 0.005 J on DAVIS).
+    pub iterations: u32,
+    /// GrabCut's smoothness weight `γ` (per unit of neighbour distance). Default `10`:
+    /// GrabCut's 50 emptied tight boxes around objects coloured like their surroundings
+    /// (mean J 0.28 against 0.73 on the 8 DAVIS moving-camera sequences, oracle boxes).
+    pub smoothness: f64,
+    /// Foreground bonus at the box centre (log-likelihood units), falling linearly to 0 at the
+    /// box border: detectors centre their boxes on the object. Default `1.0`.
+    pub centre_prior: f64,
+    /// How much the foreground model trusts the box centre over its border: a box pixel's
+    /// weight in the foreground colour model is `1 − centre_weight·r` (`r` = 0 at the centre,
+    /// 1 on the box border; at least 0.05). Default `1.0`.
+    pub centre_weight: f64,
+    /// Components smaller than this fraction of the largest are dropped. Default `0.2`.
+    pub keep_fraction: f64,
+    /// Seed of the k-means.
+    pub seed: u64,
+}
+
+impl Default for RefineConfig {
+    fn default() -> Self {
+        Self {
+            max_side: 80,
+            ring: 0.08,
+            clusters: 8,
+            iterations: 2,
+            smoothness: 10.0,
+            centre_prior: 1.0,
+            centre_weight: 1.0,
+            keep_fraction: 0.2,
+            seed: 0x9ab_c07,
+        }
+    }
+}
+
+impl RefineConfig {
+    /// Checks every setting.
+    pub fn validate(&self) -> Result<(), DetectError> {
+        let bad = |field: &'static str, value: f64, reason: &'static str| {
+            Err(DetectError::InvalidConfig {
+                field,
+                value,
+                reason,
+            })
+        };
+        if !(8..=512).contains(&self.max_side) {
+            return bad("max_side", self.max_side as f64, "must be in 8..=512");
+        }
+        if !(self.ring.is_finite() && (0.0..=1.0).contains(&self.ring)) {
+            return bad("ring", self.ring, "must be in [0, 1]");
+        }
+        if !(2..=32).contains(&self.clusters) {
+            return bad("clusters", self.clusters as f64, "must be in 2..=32");
+        }
+        if !(1..=20).contains(&self.iterations) {
+            return bad("iterations", self.iterations as f64, "must be in 1..=20");
+        }
+        if !(self.smoothness.is_finite() && (0.0..=1000.0).contains(&self.smoothness)) {
+            return bad("smoothness", self.smoothness, "must be in [0, 1000]");
+        }
+        if !(self.centre_prior.is_finite() && (0.0..=100.0).contains(&self.centre_prior)) {
+            return bad("centre_prior", self.centre_prior, "must be in [0, 100]");
+        }
+        if !(self.centre_weight.is_finite() && (0.0..=1.0).contains(&self.centre_weight)) {
+            return bad("centre_weight", self.centre_weight, "must be in [0, 1]");
+        }
+        if !(self.keep_fraction.is_finite() && (0.0..=1.0).contains(&self.keep_fraction)) {
+            return bad("keep_fraction", self.keep_fraction, "must be in [0, 1]");
+        }
+        Ok(())
+    }
+}
+
+/// The working crop: the frame region `[x0, x0 + cw·scale) × [y0, y0 + ch·scale)` averaged
+/// down by `scale`.
+struct Crop {
+    x0: f64,
+    y0: f64,
+    scale: f64,
+    w: usize,
+    h: usize,
+    rgb: Vec<[f32; 3]>,
+    /// 0 = ring (hard background), 1 = inside the box.
+    inside: Vec<bool>,
+    /// Centre prior per pixel in `[0, 1]`: 0 at the centre, 1 at the box border.
+    radial: Vec<f32>,
+}
+
+fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
+    let (fw, fh) = (frame.width() as f64, frame.height() as f64);
+    let b = BBox::from_xyxy(
+        bbox.x.max(0.0),
+        bbox.y.max(0.0),
+        bbox.x2().min(fw),
+        bbox.y2().min(fh),
+    );
+    if !(b.w >= 2.0 && b.h >= 2.0) {
+        return None;
+    }
+    let side = b.w.max(b.h);
+    let scale0 = ((1.0 + 2.0 * cfg.ring) * side / cfg.max_side as f64).max(1.0);
+    let ring = (cfg.ring * side).max(2.0 * scale0);
+    let rx0 = (b.x - ring).max(0.0).floor();
+    let ry0 = (b.y - ring).max(0.0).floor();
+    let rx1 = (b.x2() + ring).min(fw).ceil();
+    let ry1 = (b.y2() + ring).min(fh).ceil();
+    let scale = ((rx1 - rx0).max(ry1 - ry0) / cfg.max_side as f64).max(1.0);
+    let w = ((rx1 - rx0) / scale).floor().max(1.0) as usize;
+    let h = ((ry1 - ry0) / scale).floor().max(1.0) as usize;
+    let mut rgb = vec![[0f32; 3]; w * h];
+    let mut inside = vec![false; w * h];
+    let mut radial = vec![0f32; w * h];
+    let (cx, cy) = (b.x + b.w / 2.0, b.y + b.h / 2.0);
+    for j in 0..h {
+        let ya = ry0 + j as f64 * scale;
+        let (py0, py1) = (ya as u32, ((ya + scale) as u32).max(ya as u32 + 1));
+        for i in 0..w {
+            let xa = rx0 + i as f64 * scale;
+            let (px0, px1) = (xa as u32, ((xa + scale) as u32).max(xa as u32 + 1));
+            let mut s = [0f32; 3];
+            let mut n = 0f32;
+            for y in py0..py1.min(frame.height()) {
+                for x in px0..px1.min(frame.width()) {
+                    if let Some(c) = frame.rgb_at(x, y) {
+                        s[0] += c[0] as f32;
+                        s[1] += c[1] as f32;
+                        s[2] += c[2] as f32;
+                        n += 1.0;
+                    }
+                }
+            }
+            let k = j * w + i;
+            if n > 0.0 {
+                rgb[k] = [s[0] / n, s[1] / n, s[2] / n];
+            }
+            let (mx, my) = (xa + scale / 2.0, ya + scale / 2.0);
+            inside[k] = mx >= b.x && mx < b.x2() && my >= b.y && my < b.y2();
+            let (dx, dy) = ((mx - cx) / (b.w / 2.0), (my - cy) / (b.h / 2.0));
+            radial[k] = (dx * dx + dy * dy).sqrt().min(1.5) as f32;
+        }
+    }
+    Some(Crop {
+        x0: rx0,
+        y0: ry0,
+        scale,
+        w,
+        h,
+        rgb,
+        inside,
+        radial,
+    })
+}
+
+/// One Gaussian of a colour mixture (full covariance).
+#[derive(Clone, Copy)]
+struct Gauss {
+    mean: [f64; 3],
+    inv: [[f64; 3]; 3],
+    /// `ln(weight) − ½·ln det Σ` (the constant `−(3/2)·ln 2π` is common to all and dropped).
+    log_norm: f64,
+}
+
+/// Colour noise floor added to each covariance's diagonal (JPEG noise, quantisation): keeps a
+/// Gaussian fitted on one flat colour from becoming infinitely sharp.
+const COV_FLOOR: f64 = 9.0;
+
+struct Mixture {
+    parts: Vec<Gauss>,
+}
+
+impl Mixture {
+    /// Fits one Gaussian per label from weighted pixels (`labels[i]` in `0..k`).
+    fn fit(rgb: &[[f32; 3]], weights: &[f64], labels: &[usize], k: usize) -> Option<Mixture> {
+        let mut sw = vec![0f64; k];
+        let mut sm = vec![[0f64; 3]; k];
+        let mut ss = vec![[[0f64; 3]; 3]; k];
+        for ((c, &w), &l) in rgb.iter().zip(weights).zip(labels) {
+            if w <= 0.0 || l >= k {
+                continue;
+            }
+            sw[l] += w;
+            for a in 0..3 {
+                let ca = c[a] as f64;
+                sm[l][a] += w * ca;
+                for b in 0..3 {
+                    ss[l][a][b] += w * ca * c[b] as f64;
+                }
+            }
+        }
+        let total: f64 = sw.iter().sum();
+        if total <= 0.0 {
+            return None;
+        }
+        let mut parts = Vec::new();
+        for l in 0..k {
+            if sw[l] < 1e-9 {
+                continue;
+            }
+            let mean = [sm[l][0] / sw[l], sm[l][1] / sw[l], sm[l][2] / sw[l]];
+            let mut cov = [[0f64; 3]; 3];
+            for a in 0..3 {
+                for b in 0..3 {
+                    cov[a][b] = ss[l][a][b] / sw[l] - mean[a] * mean[b];
+                }
+                cov[a][a] += COV_FLOOR;
+            }
+            let Some((inv, det)) = invert3(&cov) else {
+                continue;
+            };
+            let weight = sw[l] / total;
+            parts.push(Gauss {
+                mean,
+                inv,
+                log_norm: weight.ln() - 0.5 * det.ln(),
+            });
+        }
+        (!parts.is_empty()).then_some(Mixture { parts })
+    }
+
+    /// `(index of the most likely Gaussian, −ln p(c))`, the mixture's negative log-likelihood
+    /// up to a constant shared by every mixture.
+    fn eval(&self, c: &[f32; 3]) -> (usize, f64) {
+        let mut best = (0, f64::NEG_INFINITY);
+        let mut terms = [0f64; 32];
+        for (i, g) in self.parts.iter().enumerate() {
+            let d = [
+                c[0] as f64 - g.mean[0],
+                c[1] as f64 - g.mean[1],
+                c[2] as f64 - g.mean[2],
+            ];
+            let mut q = 0.0;
+            for a in 0..3 {
+                for b in 0..3 {
+                    q += d[a] * g.inv[a][b] * d[b];
+                }
+            }
+            let t = g.log_norm - 0.5 * q;
+            terms[i] = t;
+            if t > best.1 {
+                best = (i, t);
+            }
+        }
+        // log-sum-exp, stable against the very negative terms of far-away Gaussians.
+        let s: f64 = terms[..self.parts.len()]
+            .iter()
+            .map(|t| (t - best.1).exp())
+            .sum();
+        (best.0, -(best.1 + s.ln()))
+    }
+}
+
+fn invert3(m: &[[f64; 3]; 3]) -> Option<([[f64; 3]; 3], f64)> {
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if !(det.is_finite() && det > 1e-9) {
+        return None;
+    }
+    let k = 1.0 / det;
+    let inv = [
+        [
+            (m[1][1] * m[2][2] - m[1][2] * m[2][1]) * k,
+            (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * k,
+            (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * k,
+        ],
+        [
+            (m[1][2] * m[2][0] - m[1][0] * m[2][2]) * k,
+            (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * k,
+            (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * k,
+        ],
+        [
+            (m[1][0] * m[2][1] - m[1][1] * m[2][0]) * k,
+            (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * k,
+            (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * k,
+        ],
+    ];
+    Some((inv, det))
+}
+
+/// Fixed-point scale of the cut's capacities (costs are in log-likelihood units).
+const CAP_SCALE: f64 = 256.0;
+
+/// Refines `bbox` into a mask of `frame`'s object inside it. `Ok(None)` when the box has no
+/// usable area inside the frame (under 2×2 pixels) or the segmentation found nothing.
+pub fn refine_box(
+    frame: &Frame,
+    bbox: &BBox,
+    cfg: &RefineConfig,
+) -> Result<Option<Mask>, DetectError> {
+    cfg.validate()?;
+    if !bbox.is_valid() {
+        return Ok(None);
+    }
+    let Some(crop) = make_crop(frame, bbox, cfg) else {
+        return Ok(None);
+    };
+    let n = crop.w * crop.h;
+    let has_ring = crop.inside.iter().any(|&v| !v);
+    // Without a ring (a box as large as the frame) the box border stands in for it.
+    let ring: Vec<bool> = if has_ring {
+        crop.inside.iter().map(|&v| !v).collect()
+    } else {
+        (0..n)
+            .map(|k| {
+                let (i, j) = (k % crop.w, k / crop.w);
+                i == 0 || j == 0 || i + 1 == crop.w || j + 1 == crop.h
+            })
+            .collect()
+    };
+    let unknown: Vec<bool> = ring.iter().map(|&r| !r).collect();
+    if !unknown.iter().any(|&u| u) {
+        return Ok(None);
+    }
+
+    // Step 2: one palette for ring and box, from the colour analyser's k-means.
+    let sample = |sel: &dyn Fn(usize) -> bool| -> Result<ColorSample, DetectError> {
+        let mut pos = Vec::new();
+        let mut rgb = Vec::new();
+        for k in (0..n).filter(|&k| sel(k)) {
+            pos.push(Point::new((k % crop.w) as f64, (k / crop.w) as f64));
+            let c = crop.rgb[k];
+            rgb.push([c[0] as u8, c[1] as u8, c[2] as u8]);
+        }
+        ColorSample::new(pos, rgb, 1.0).map_err(color_err)
+    };
+    let bg_s = sample(&|k| ring[k])?;
+    let fg_s = sample(&|k| unknown[k])?;
+    let pal = joint_palette(
+        &bg_s,
+        &fg_s,
+        &ColorConfig {
+            clusters: cfg.clusters,
+            seed: cfg.seed,
+            max_iterations: 20,
+            tolerance: 1.0,
+            ..ColorConfig::default()
+        },
+    )
+    .map_err(color_err)?;
+    let k = pal.centroids.len();
+    let mut label = vec![0usize; n];
+    {
+        let (mut ia, mut ib) = (pal.labels_a.iter(), pal.labels_b.iter());
+        for (p, l) in label.iter_mut().enumerate() {
+            let src = if ring[p] { ia.next() } else { ib.next() };
+            *l = src.copied().unwrap_or(0);
+        }
+    }
+    // Initial foreground weights: the box's pixels, more so near its centre.
+    let mut is_fg: Vec<bool> = unknown.clone();
+    let fg_weight = |is_fg: &[bool]| -> Vec<f64> {
+        (0..n)
+            .map(|p| {
+                if is_fg[p] {
+                    (1.0 - cfg.centre_weight * crop.radial[p] as f64).max(0.05)
+                } else {
+                    0.0
+                }
+            })
+            .collect::<Vec<f64>>()
+    };
+
+    // Pairwise weights (GrabCut's β from the mean squared neighbour difference).
+    let offsets: [(isize, isize, f64); 4] = [
+        (1, 0, 1.0),
+        (0, 1, 1.0),
+        (1, 1, std::f64::consts::SQRT_2),
+        (-1, 1, std::f64::consts::SQRT_2),
+    ];
+    let d2 = |a: &[f32; 3], b: &[f32; 3]| -> f64 {
+        (0..3)
+            .map(|c| {
+                let d = (a[c] - b[c]) as f64;
+                d * d
+            })
+            .sum()
+    };
+    let mut sum = 0.0;
+    let mut cnt = 0usize;
+    let mut pairs: Vec<(u32, u32, f64)> = Vec::with_capacity(4 * n);
+    for j in 0..crop.h {
+        for i in 0..crop.w {
+            for &(dx, dy, dist) in &offsets {
+                let (ni, nj) = (i as isize + dx, j as isize + dy);
+                if ni < 0 || nj < 0 || ni >= crop.w as isize || nj >= crop.h as isize {
+                    continue;
+                }
+                let (p, q) = (j * crop.w + i, nj as usize * crop.w + ni as usize);
+                let v = d2(&crop.rgb[p], &crop.rgb[q]);
+                sum += v;
+                cnt += 1;
+                pairs.push((p as u32, q as u32, dist));
+            }
+        }
+    }
+    let beta = if sum > 0.0 {
+        cnt as f64 / (2.0 * sum)
+    } else {
+        0.0
+    };
+    let pair_caps: Vec<i32> = pairs
+        .iter()
+        .map(|&(p, q, dist)| {
+            let v = d2(&crop.rgb[p as usize], &crop.rgb[q as usize]);
+            (cfg.smoothness * (-beta * v).exp() / dist * CAP_SCALE).round() as i32
+        })
+        .collect();
+
+    let mut first = true;
+    for _ in 0..cfg.iterations {
+        let wf = fg_weight(&is_fg);
+        let wb: Vec<f64> = (0..n).map(|p| if is_fg[p] { 0.0 } else { 1.0 }).collect();
+        // In the first round the box is all "foreground", so the background model sees only
+        // the ring: the box's own background colours are learnt from the ring's.
+        let (Some(fgm), Some(bgm)) = (
+            Mixture::fit(&crop.rgb, &wf, &label, k.max(1)),
+            Mixture::fit(&crop.rgb, &wb, &label, k.max(1)),
+        ) else {
+            break;
+        };
+        let mut g = FlowGraph::new(n);
+        for (p, &hard_bg) in ring.iter().enumerate() {
+            if hard_bg {
+                g.add_terminals(p, 0, INFINITE);
+                continue;
+            }
+            let (_, dfg) = fgm.eval(&crop.rgb[p]);
+            let (_, dbg) = bgm.eval(&crop.rgb[p]);
+            // A bonus for the foreground that is largest at the box centre and nil on its
+            // border: detectors centre their boxes on the object.
+            let prior = cfg.centre_prior * (crop.radial[p] as f64 - 1.0).min(0.0);
+            let cost_fg = dfg + prior;
+            let cost_bg = dbg;
+            // Source side = foreground: a pixel pays `cost_bg` if cut to the sink side.
+            let m = cost_fg.min(cost_bg);
+            g.add_terminals(
+                p,
+                ((cost_bg - m) * CAP_SCALE).min(1e8) as i32,
+                ((cost_fg - m) * CAP_SCALE).min(1e8) as i32,
+            );
+        }
+        for (&(p, q, _), &c) in pairs.iter().zip(&pair_caps) {
+            if c > 0 {
+                g.add_edge(p as usize, q as usize, c, c);
+            }
+        }
+        let (side, _) = g.min_cut();
+        let changed = side.iter().zip(&is_fg).filter(|(a, b)| a != b).count();
+        // A cut that empties the box means the models have drifted onto the background's
+        // colours (tight boxes around objects coloured like their surroundings): keep the
+        // last non-empty answer instead.
+        if !first && !side.iter().any(|&v| v) {
+            break;
+        }
+        is_fg = side;
+        // Refit: each pixel to the most likely Gaussian of its side's mixture.
+        for p in 0..n {
+            let m = if is_fg[p] { &fgm } else { &bgm };
+            label[p] = m.eval(&crop.rgb[p]).0;
+        }
+        if !first && changed == 0 {
+            break;
+        }
+        first = false;
+    }
+
+    // Step 5: keep the large components.
+    let bits: Vec<u8> = is_fg.iter().map(|&v| v as u8).collect();
+    let mut comps = Components::new();
+    let blobs = comps
+        .label(&bits, crop.w as u32, crop.h as u32, Connectivity::Eight)?
+        .to_vec();
+    let Some(largest) = blobs.iter().map(|b| b.area).max() else {
+        return Ok(None);
+    };
+    let mut keep = vec![0f32; n];
+    for (i, b) in blobs.iter().enumerate() {
+        if (b.area as f64) < cfg.keep_fraction * largest as f64 {
+            continue;
+        }
+        for r in comps.runs(i) {
+            let row = r.y as usize * crop.w;
+            keep[row + r.x0 as usize..row + r.x1 as usize].fill(1.0);
+        }
+    }
+    Ok(upsample(&crop, &keep, frame, bbox))
+}
+
+/// The crop's labels as a frame mask inside `bbox` (bilinear, threshold ½).
+fn upsample(crop: &Crop, keep: &[f32], frame: &Frame, bbox: &BBox) -> Option<Mask> {
+    let x0 = bbox.x.max(0.0).floor() as u32;
+    let y0 = bbox.y.max(0.0).floor() as u32;
+    let x1 = (bbox.x2().ceil().max(0.0) as u32).min(frame.width());
+    let y1 = (bbox.y2().ceil().max(0.0) as u32).min(frame.height());
+    if x1 <= x0 || y1 <= y0 {
+        return None;
+    }
+    let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
+    let at = |i: isize, j: isize| -> f32 {
+        let i = i.clamp(0, crop.w as isize - 1) as usize;
+        let j = j.clamp(0, crop.h as isize - 1) as usize;
+        keep[j * crop.w + i]
+    };
+    let mut data = vec![0u8; w * h];
+    for y in 0..h {
+        let fy = ((y0 as usize + y) as f64 + 0.5 - crop.y0) / crop.scale - 0.5;
+        let (jy, ty) = (fy.floor() as isize, (fy - fy.floor()) as f32);
+        for x in 0..w {
+            let fx = ((x0 as usize + x) as f64 + 0.5 - crop.x0) / crop.scale - 0.5;
+            let (ix, tx) = (fx.floor() as isize, (fx - fx.floor()) as f32);
+            let v = (1.0 - ty) * ((1.0 - tx) * at(ix, jy) + tx * at(ix + 1, jy))
+                + ty * ((1.0 - tx) * at(ix, jy + 1) + tx * at(ix + 1, jy + 1));
+            data[y * w + x] = (v >= 0.5) as u8;
+        }
+    }
+    let m = Mask::new(x0 as i32, y0 as i32, w as u32, h as u32, data)
+        .ok()?
+        .tight();
+    (!m.is_empty()).then_some(m)
+}
+
+fn color_err(e: crate::features::color::ColorError) -> DetectError {
+    DetectError::Refine {
+        reason: e.to_string(),
+    }
+}
+
+/// A detector that turns boxes from another source (files, a box detector) into masks.
+/// Boxes are handed in per frame with [`BoxRefiner::set_boxes`]; a box that cannot be refined
+/// is passed on as a filled box so no detection is lost.
+#[derive(Debug, Clone, Default)]
+pub struct BoxRefiner {
+    cfg: RefineConfig,
+    boxes: Vec<Detection>,
+}
+
+impl BoxRefiner {
+    /// A refiner with validated settings.
+    pub fn new(cfg: RefineConfig) -> Result<Self, DetectError> {
+        cfg.validate()?;
+        Ok(Self {
+            cfg,
+            boxes: Vec::new(),
+        })
+    }
+
+    /// The boxes of the next frame to refine (their score and class are kept).
+    pub fn set_boxes(&mut self, boxes: Vec<Detection>) {
+        self.boxes = boxes;
+    }
+
+    /// Refines every detection of `dets` in place (masks replace filled boxes).
+    pub fn refine_all(&self, frame: &Frame, dets: &mut [Detection]) -> Result<(), DetectError> {
+        for d in dets.iter_mut() {
+            let m = refine_box(frame, &d.bbox, &self.cfg)?
+                .unwrap_or_else(|| Mask::from_bbox(&d.bbox).clipped(frame.width(), frame.height()));
+            if !m.is_empty() {
+                d.bbox = m.bbox();
+                d.mask = Some(m);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Detector for BoxRefiner {
+    fn detect(&mut self, frame: &Frame) -> Result<Vec<Detection>, DetectError> {
+        let mut dets = std::mem::take(&mut self.boxes);
+        self.refine_all(frame, &mut dets)?;
+        Ok(dets)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A red disc on a striped green/blue background.
+    fn disc_image(w: u32, h: u32, cx: f64, cy: f64, r: f64) -> (Vec<u8>, Vec<u8>) {
+        let mut img = vec![0u8; (w * h * 3) as usize];
+        let mut gt = vec![0u8; (w * h) as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let inside =
+                    ((x as f64 + 0.5 - cx).powi(2) + (y as f64 + 0.5 - cy).powi(2)).sqrt() < r;
+                let c = if inside {
+                    [200, 40, 30]
+                } else if (x / 6 + y / 9) % 2 == 0 {
+                    [40, 160, 60]
+                } else {
+                    [50, 70, 170]
+                };
+                img[3 * i..3 * i + 3].copy_from_slice(&c);
+                gt[i] = inside as u8;
+            }
+        }
+        (img, gt)
+    }
+
+    #[test]
+    fn disc_in_loose_box() {
+        let (w, h) = (160, 120);
+        let (img, gt) = disc_image(w, h, 80.0, 60.0, 30.0);
+        let f = Frame::rgb(&img, w, h).unwrap();
+        let gt = Mask::from_full(w, h, &gt).unwrap();
+        let b = BBox::new(40.0, 20.0, 80.0, 80.0);
+        let m = refine_box(&f, &b, &RefineConfig::default())
+            .unwrap()
+            .unwrap();
+        let filled = Mask::from_bbox(&b);
+        eprintln!(
+            "iou {} box {} area {}",
+            m.iou(&gt),
+            filled.iou(&gt),
+            m.area()
+        );
+        assert!(m.iou(&gt) > 0.9);
+    }
+}
