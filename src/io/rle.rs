@@ -92,13 +92,13 @@ pub(crate) fn runs_extent(
     (l0 != u64::MAX).then_some((l0, p0, l1, p1))
 }
 
-/// The run lengths of a row-major bitmap (non-zero = foreground), alternating background /
-/// foreground and starting with background (0 when the first pixel is foreground). CVAT's
-/// `<mask rle>` and VOT's `m…` masks store a mask's box this way; one encoder for both.
-pub(crate) fn bitmap_runs(bitmap: &[u8]) -> Vec<u64> {
+/// The run lengths of a sequence of pixel values: a run ends where the value changes, and the
+/// first run is of zeros (empty when the first value is not 0). COCO RLE (down columns) and
+/// CVAT's and VOT's masks (along rows) all count runs this way.
+fn runs_of(values: impl IntoIterator<Item = u8>) -> Vec<u64> {
     let mut runs = Vec::new();
     let (mut cur, mut run) = (0u8, 0u64);
-    for &v in bitmap {
+    for v in values {
         if v != cur {
             runs.push(run);
             run = 0;
@@ -108,6 +108,13 @@ pub(crate) fn bitmap_runs(bitmap: &[u8]) -> Vec<u64> {
     }
     runs.push(run);
     runs
+}
+
+/// The run lengths of a row-major 0/1 bitmap, alternating background / foreground and
+/// starting with background (0 when the first pixel is foreground). CVAT's `<mask rle>` and
+/// VOT's `m…` masks store a mask's box this way; one encoder for both.
+pub(crate) fn bitmap_runs(bitmap: &[u8]) -> Vec<u64> {
+    runs_of(bitmap.iter().copied())
 }
 
 /// Calls `set(line, position)` for every foreground pixel of `runs` (background first, as
@@ -138,20 +145,13 @@ impl Rle {
                 expected,
             });
         }
-        let mut counts = Vec::new();
-        let (mut prev, mut run) = (0u8, 0u32);
-        for x in 0..width as usize {
-            for y in 0..height as usize {
-                let v = (bitmap[y * width as usize + x] != 0) as u8;
-                if v != prev {
-                    counts.push(run);
-                    run = 0;
-                    prev = v;
-                }
-                run += 1;
-            }
-        }
-        counts.push(run);
+        let (w, h) = (width as usize, height as usize);
+        let column_major = (0..w).flat_map(|x| (0..h).map(move |y| (bitmap[y * w + x] != 0) as u8));
+        // COCO stores runs as u32; a bitmap of 2³² bytes is far beyond every cap (`limits`).
+        let counts = runs_of(column_major)
+            .into_iter()
+            .map(|r| r as u32)
+            .collect();
         Ok(Rle {
             height,
             width,

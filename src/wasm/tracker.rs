@@ -3,7 +3,9 @@
 use super::*;
 use crate::frame::{TrackState, TrackedShape};
 use crate::io::{Record, Rle};
-use crate::track::offline::{self, OfflineConfig, Progress, SequenceInfo, Snapshots};
+use crate::track::offline::{
+    OfflineConfig, OfflineError, OfflineTracker, Progress, RleHistory, RleShape,
+};
 use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
 use serde::Serialize;
 use tsify::{Ts, Tsify};
@@ -60,31 +62,11 @@ impl ShapeJs {
 #[serde(transparent)]
 pub struct Shapes(pub Vec<ShapeJs>);
 
-/// One reported shape as the tracker keeps it: the shape without its mask bitmap, and the
-/// mask as RLE (a few hundred bytes instead of a bitmap the size of the box), so a long video's
-/// history stays small.
-#[derive(Debug, Clone)]
-pub(super) struct Kept {
-    shape: TrackedShape,
-    rle: Option<Rle>,
-}
-
-impl Kept {
-    fn record(&self) -> Record {
-        let mut r = Record::from_tracked(&self.shape, None);
-        r.mask = self.rle.clone();
-        r
-    }
-}
-
-/// What a tracker built with offline options keeps for the offline pass besides its history.
-pub(super) struct OfflineState {
-    config: OfflineConfig,
-    fps: f64,
-    /// Image size from the options (box mode); frames override it.
-    size: Option<(u32, u32)>,
-    /// Each track's first and last appearance, taken while the frames stream past.
-    snapshots: Snapshots,
+/// A kept shape as a record (its mask as RLE).
+fn record_of(k: &RleShape) -> Record {
+    let mut r = Record::from_tracked(&k.shape, None);
+    r.mask = k.rle.clone();
+    r
 }
 
 /// The tracker. Owns its ids (two trackers on a page never share a counter) and keeps every
@@ -95,13 +77,15 @@ pub(super) struct OfflineState {
 /// occlusions, then gap filling) over every frame tracked so far.
 #[wasm_bindgen]
 pub struct Tracker {
-    inner: CoreTracker,
-    /// Everything reported so far; after `finish`, the offline result.
-    history: Vec<Kept>,
-    /// Frame size, known from the first frame (masks need it for RLE).
+    /// The core's offline tracker, keeping every reported shape with its mask as RLE (a few
+    /// hundred bytes instead of a bitmap the size of the box, so a long video's history stays
+    /// small); after `finish`, the offline result. Built without offline options, it is only
+    /// the online tracker and that history: appearance snapshots are off and `finish` refuses.
+    inner: OfflineTracker<RleHistory>,
+    /// Frame size, known from the first frame: later frames must match it.
     size: Option<(u32, u32)>,
-    /// Present when the tracker was built for the offline pass.
-    offline: Option<OfflineState>,
+    /// Whether the tracker was built for the offline pass.
+    offline: bool,
     /// `finish` ran: the history is final and no frame may follow.
     finished: bool,
 }
@@ -119,7 +103,7 @@ impl Tracker {
             Some(c) => settings(c)?.to_core()?,
             None => TrackConfig::default(),
         };
-        let offline = match offline {
+        let (config, fps, size) = match offline {
             Some(o) => {
                 let o = settings(o)?;
                 if !(o.fps.is_finite() && o.fps > 0.0) {
@@ -138,18 +122,27 @@ impl Tracker {
                         }))
                     }
                 };
-                Some(OfflineState {
-                    config: o.to_core(cfg.clone())?,
-                    fps: o.fps,
-                    size,
-                    snapshots: Snapshots::new(),
-                })
+                (Some(o.to_core(cfg.clone())?), o.fps, size)
             }
-            None => None,
+            None => (None, 1.0, None),
         };
+        let offline = config.is_some();
+        // Without offline options nothing is kept for a pass that never runs; the frame rate
+        // is then never used.
+        let config = config.unwrap_or_else(|| {
+            let mut c = OfflineConfig {
+                online: cfg.clone(),
+                ..OfflineConfig::default()
+            };
+            c.appearance.enabled = false;
+            c
+        });
+        let tracker = CoreTracker::new(cfg).map_err(js_error)?;
+        let inner = OfflineTracker::with_history(tracker, config, fps)
+            .map_err(js_error)?
+            .with_sequence_image_size(size);
         Ok(Tracker {
-            inner: CoreTracker::new(cfg).map_err(js_error)?,
-            history: Vec::new(),
+            inner,
             size: None,
             offline,
             finished: false,
@@ -159,13 +152,13 @@ impl Tracker {
     /// Number of frames tracked so far.
     #[wasm_bindgen(getter)]
     pub fn frame(&self) -> u32 {
-        self.inner.frame()
+        self.inner.frames()
     }
 
     /// Whether this tracker can run the offline pass (it was built with offline options).
     #[wasm_bindgen(getter)]
     pub fn offline(&self) -> bool {
-        self.offline.is_some()
+        self.offline
     }
 
     /// Whether the offline pass has run (the result is final; no frame may follow).
@@ -188,20 +181,9 @@ impl Tracker {
         let image = buf.frame()?;
         let shapes = self
             .inner
-            .update(Some(&image), &detections.inner)
-            .map_err(js_error)?;
-        if let Some(off) = self.offline.as_mut() {
-            if off.config.appearance.enabled {
-                // Only shapes seen in this frame: a track confirmed now also reports its
-                // tentative frames, whose pixels are gone.
-                let now = self.inner.frame();
-                for s in shapes.iter().filter(|s| s.frame == now) {
-                    off.snapshots
-                        .record(&image, s, off.config.appearance.max_side);
-                }
-            }
-        }
-        self.report(shapes)
+            .push_frame(Some(&image), &detections.inner)
+            .map_err(online_error)?;
+        shapes_js(shapes)
     }
 
     /// Tracks frame `frame` from detections only (box mode: no pixels, e.g. a `det.txt`).
@@ -215,7 +197,7 @@ impl Tracker {
         self.check_next(frame)?;
         // Shapes are reported as RLE of the whole image: without its size a mask would come
         // back empty (`size: [0, 0]`), so refuse before anything changes.
-        if self.image_size().is_none() && detections.inner.iter().any(|d| d.mask.is_some()) {
+        if self.inner.image_size().is_none() && detections.inner.iter().any(|d| d.mask.is_some()) {
             return Err(js_error(BindingError::Invalid(
                 "mask detections without a frame need the image size: pass width and height \
                  in the tracker's options, or call update with a frame first"
@@ -224,15 +206,15 @@ impl Tracker {
         }
         let shapes = self
             .inner
-            .update(None, &detections.inner)
-            .map_err(js_error)?;
-        self.report(shapes)
+            .push_frame(None, &detections.inner)
+            .map_err(online_error)?;
+        shapes_js(shapes)
     }
 
     /// Every shape reported so far, as records (by frame, then id); after `finish`, the
     /// offline result.
     pub fn tracks(&self) -> Result<Ts<Records>, JsValue> {
-        let mut recs: Vec<Record> = self.history.iter().map(Kept::record).collect();
+        let mut recs: Vec<Record> = self.inner.online_shapes().iter().map(record_of).collect();
         recs.sort_by_key(|r| (r.frame, r.id));
         ts(&from_core_records(&recs))
     }
@@ -250,9 +232,9 @@ impl Tracker {
         if self.finished {
             return Err(js_error(BindingError::Finished));
         }
-        let Some(off) = self.offline.as_ref() else {
+        if !self.offline {
             return Err(js_error(BindingError::NotOffline));
-        };
+        }
         let callback: Option<js_sys::Function> = progress.map(JsCast::unchecked_into);
         // The core's progress callback cannot fail: the first exception is kept, further
         // reports are dropped, and it is raised once the pass returns.
@@ -273,67 +255,16 @@ impl Tracker {
                 thrown = Some(e);
             }
         };
-        let seq = SequenceInfo {
-            fps: off.fps,
-            image_size: self.image_size(),
-        };
-        let snapshots = (!off.snapshots.is_empty()).then_some(&off.snapshots);
-        let result = offline::relink(
-            self.relink_input(),
-            snapshots,
-            &off.config,
-            &seq,
-            &mut report,
-        )
-        .map_err(js_error)?;
+        let result = self.inner.relink(&mut report).map_err(js_error)?;
         if let Some(e) = thrown {
             return Err(js_error(BindingError::Progress {
                 message: thrown_message(&e),
             }));
         }
 
-        let map = result.id_map();
-        let (w, h) = seq.image_size.unwrap_or((0, 0));
-        for k in &mut self.history {
-            if let Some(&root) = map.get(&k.shape.id) {
-                k.shape.id = root;
-            }
-        }
-        // A join may be made over a slave's coasted tail (the pass ignores coasted shapes):
-        // where that tail now meets the master's observed shape, the observation stays.
-        let observed: std::collections::HashSet<(u64, u32)> = self
-            .history
-            .iter()
-            .filter(|k| !k.shape.interpolated)
-            .map(|k| (k.shape.id, k.shape.frame))
-            .collect();
-        self.history
-            .retain(|k| !(k.shape.interpolated && observed.contains(&(k.shape.id, k.shape.frame))));
-        // The history keeps the online pass's coasted shapes (tracker output the page already
-        // shows): only the gaps the offline pass filled where nothing was shown are new.
-        let present: std::collections::HashSet<(u64, u32)> = self
-            .history
-            .iter()
-            .map(|k| (k.shape.id, k.shape.frame))
-            .collect();
-        let mut added = Vec::new();
-        for mut s in result
-            .shapes
-            .into_iter()
-            .filter(|s| s.interpolated && !present.contains(&(s.id, s.frame)))
-        {
-            let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
-            let kept = Kept { shape: s, rle };
-            added.push(kept.record());
-            self.history.push(kept);
-        }
-        self.history.sort_by_key(|k| (k.shape.frame, k.shape.id));
+        let added: Vec<Record> = self.inner.apply(&result).iter().map(record_of).collect();
         self.finished = true;
-        // The snapshots are not needed any more.
-        if let Some(off) = self.offline.as_mut() {
-            off.snapshots = Snapshots::new();
-        }
-        let records: Vec<Record> = self.history.iter().map(Kept::record).collect();
+        let records: Vec<Record> = self.inner.online_shapes().iter().map(record_of).collect();
         ts(&OfflineOutput {
             records: from_core_records(&records),
             joins: result.joins.iter().map(JoinJs::from).collect(),
@@ -348,7 +279,7 @@ impl Tracker {
         if self.finished {
             return Err(js_error(BindingError::Finished));
         }
-        let expected = self.inner.frame() + 1;
+        let expected = self.inner.frames() + 1;
         if frame != expected {
             return Err(js_error(BindingError::FrameOrder {
                 expected,
@@ -371,46 +302,22 @@ impl Tracker {
         }
         Ok(())
     }
+}
 
-    /// The image size: from the frames, else from the offline options.
-    fn image_size(&self) -> Option<(u32, u32)> {
-        self.size.or(self.offline.as_ref().and_then(|o| o.size))
+/// An error of the online pass as JS has always seen it: the tracker's own message, without
+/// the offline tracker's "online pass" prefix.
+fn online_error(e: OfflineError) -> JsValue {
+    match e {
+        OfflineError::Track(e) => js_error(e),
+        e => js_error(e),
     }
+}
 
-    fn report(&mut self, shapes: Vec<TrackedShape>) -> Result<Ts<Shapes>, JsValue> {
-        let (w, h) = self.image_size().unwrap_or((0, 0));
-        let mut out = Vec::with_capacity(shapes.len());
-        for mut s in shapes {
-            let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
-            out.push(ShapeJs::new(&s, rle.as_ref()));
-            self.history.push(Kept { shape: s, rle });
-        }
-        ts(&Shapes(out))
-    }
-
-    /// The online shapes for the re-linker. Masks are decoded only for shapes at the end of a
-    /// run of consecutive frames of their track: gap filling carries the mask of a gap's end
-    /// along the path, and nothing else in the offline pass reads masks, so the whole video's
-    /// masks never sit in memory as bitmaps at once.
-    fn relink_input(&self) -> Vec<TrackedShape> {
-        let present: std::collections::HashSet<(u64, u32)> = self
-            .history
-            .iter()
-            .map(|k| (k.shape.id, k.shape.frame))
-            .collect();
-        self.history
-            .iter()
-            .map(|k| {
-                let (id, f) = (k.shape.id, k.shape.frame);
-                let end = f <= 1
-                    || !present.contains(&(id, f - 1))
-                    || !present.contains(&(id, f.saturating_add(1)));
-                let mut s = k.shape.clone();
-                if end {
-                    s.mask = k.rle.as_ref().map(Rle::to_mask);
-                }
-                s
-            })
-            .collect()
-    }
+/// The shapes one update reports, as JS sees them.
+fn shapes_js(shapes: &[RleShape]) -> Result<Ts<Shapes>, JsValue> {
+    let out: Vec<ShapeJs> = shapes
+        .iter()
+        .map(|k| ShapeJs::new(&k.shape, k.rle.as_ref()))
+        .collect();
+    ts(&Shapes(out))
 }

@@ -10,7 +10,9 @@
 //!   pass; with frames it also keeps each track's first and last appearance, see
 //!   [`appearance`]), then [`OfflineTracker::finish`] runs the offline stages. This is the API a
 //!   front end binds: it owns no frames, reports [`Progress`] (phase + fraction) through a
-//!   callback, and returns plain data.
+//!   callback, and returns plain data. It keeps the online output in a [`History`]: the shapes
+//!   as they are, or with masks as RLE ([`RleHistory`]: the browser bindings run the pass through
+//!   it, [`OfflineTracker::relink`] then [`OfflineTracker::apply`]).
 //! - [`track_offline`]: the same over a whole sequence of detections without images (box mode).
 //! - [`relink()`]: the offline stages alone, over any finished online output.
 //!
@@ -61,12 +63,14 @@
 pub mod appearance;
 pub mod config;
 pub mod fill;
+pub mod history;
 pub mod relink;
 
 pub use appearance::{Snapshot, Snapshots};
 pub use config::{
     AppearanceConfig, FillConfig, JoinSolver, OfflineConfig, RelinkConfig, Trajectory,
 };
+pub use history::{History, RleHistory, RleShape};
 pub use relink::{fit_motion, rollout_backward, rollout_forward, EndState, Join};
 
 use super::{TrackError, Tracker};
@@ -357,6 +361,9 @@ pub fn relink(
 
 /// The whole-sequence offline tracker: the online pass frame by frame, then the offline stages.
 ///
+/// `H` is where the online output is kept until then ([`History`]): the shapes as they are by
+/// default, or with masks as RLE ([`RleHistory`], what the browser bindings use).
+///
 /// ```
 /// use shapetrack::track::offline::{OfflineConfig, OfflineTracker};
 /// use shapetrack::{BBox, Detection};
@@ -371,20 +378,20 @@ pub fn relink(
 /// assert_eq!(out.shapes.len(), 10);
 /// assert!(out.shapes.iter().all(|s| s.id == 1));
 /// ```
-pub struct OfflineTracker {
+pub struct OfflineTracker<H: History = Vec<TrackedShape>> {
     config: OfflineConfig,
     seq: SequenceInfo,
     tracker: Tracker,
-    shapes: Vec<TrackedShape>,
+    shapes: H,
     snapshots: Snapshots,
 }
 
-impl std::fmt::Debug for OfflineTracker {
+impl<H: History> std::fmt::Debug for OfflineTracker<H> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("OfflineTracker")
             .field("seq", &self.seq)
             .field("frames", &self.tracker.frame())
-            .field("shapes", &self.shapes.len())
+            .field("shapes", &self.shapes.items().len())
             .field("snapshots", &self.snapshots.len())
             .finish_non_exhaustive()
     }
@@ -405,13 +412,25 @@ impl OfflineTracker {
         config: OfflineConfig,
         fps: f64,
     ) -> Result<Self, OfflineError> {
+        Self::with_history(tracker, config, fps)
+    }
+}
+
+impl<H: History> OfflineTracker<H> {
+    /// An offline tracker around `tracker` that keeps its online output in an `H` (see
+    /// [`History`]); otherwise as [`OfflineTracker::with_tracker`].
+    pub fn with_history(
+        tracker: Tracker,
+        config: OfflineConfig,
+        fps: f64,
+    ) -> Result<Self, OfflineError> {
         config.validate()?;
         check_fps(fps)?;
         Ok(Self {
             config,
             seq: SequenceInfo::new(fps),
             tracker,
-            shapes: Vec::new(),
+            shapes: H::default(),
             snapshots: Snapshots::new(),
         })
     }
@@ -424,6 +443,14 @@ impl OfflineTracker {
         self
     }
 
+    /// Tells only the re-linker (and an [`RleHistory`], which encodes masks for it) the image
+    /// size, when there is one; the online tracker learns it from frames, if any. Frames given
+    /// to [`OfflineTracker::push_frame`] override it.
+    pub fn with_sequence_image_size(mut self, size: Option<(u32, u32)>) -> Self {
+        self.seq.image_size = size;
+        self
+    }
+
     /// The online pass over one frame. Returns the online shapes this frame produced (those of
     /// tracks confirmed now may carry earlier frame numbers). With a `frame`, the shapes seen
     /// in it become their tracks' appearance snapshots; the frame is not kept.
@@ -431,9 +458,11 @@ impl OfflineTracker {
         &mut self,
         frame: Option<&Frame<'_>>,
         detections: &[Detection],
-    ) -> Result<&[TrackedShape], OfflineError> {
+    ) -> Result<&[H::Item], OfflineError> {
         let out = self.tracker.update(frame, detections)?;
-        if let (Some(f), None) = (frame, self.seq.image_size) {
+        // The online tracker has checked this frame against the earlier ones (and against a
+        // size given with `with_image_size`): a frame's size is the sequence's.
+        if let Some(f) = frame {
             self.seq.image_size = Some((f.width(), f.height()));
         }
         let now = self.tracker.frame();
@@ -442,9 +471,11 @@ impl OfflineTracker {
                 self.snapshots.record(f, s, self.config.appearance.max_side);
             }
         }
-        let start = self.shapes.len();
-        self.shapes.extend(out);
-        Ok(&self.shapes[start..])
+        let start = self.shapes.items().len();
+        for s in out {
+            self.shapes.push(s, self.seq.image_size);
+        }
+        Ok(&self.shapes.items()[start..])
     }
 
     /// Skips `n` frames without detections while no track is live (see
@@ -459,8 +490,13 @@ impl OfflineTracker {
     }
 
     /// The online output so far.
-    pub fn online_shapes(&self) -> &[TrackedShape] {
-        &self.shapes
+    pub fn online_shapes(&self) -> &[H::Item] {
+        self.shapes.items()
+    }
+
+    /// The image size, when known (from frames, or as given).
+    pub fn image_size(&self) -> Option<(u32, u32)> {
+        self.seq.image_size
     }
 
     /// The appearance snapshots taken so far.
@@ -476,7 +512,29 @@ impl OfflineTracker {
     /// Runs the offline stages on everything pushed (see [`relink()`]).
     pub fn finish(self, mut progress: impl FnMut(Progress)) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
-        relink(self.shapes, snaps, &self.config, &self.seq, &mut progress)
+        let shapes = self.shapes.into_offline_input();
+        relink(shapes, snaps, &self.config, &self.seq, &mut progress)
+    }
+
+    /// The offline stages on everything pushed so far, leaving the tracker as it is: a front
+    /// end whose progress callback failed can run them again.
+    pub fn relink(
+        &self,
+        mut progress: impl FnMut(Progress),
+    ) -> Result<OfflineResult, OfflineError> {
+        let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
+        let shapes = self.shapes.offline_input();
+        relink(shapes, snaps, &self.config, &self.seq, &mut progress)
+    }
+}
+
+impl OfflineTracker<RleHistory> {
+    /// Applies `result` (from [`OfflineTracker::relink`]) to the kept output in place, for a
+    /// front end that has shown the online output as it came (see [`RleHistory::apply`]), and
+    /// frees the appearance snapshots. Returns the shapes added. No frame may follow.
+    pub fn apply(&mut self, result: &OfflineResult) -> Vec<RleShape> {
+        self.snapshots = Snapshots::new();
+        self.shapes.apply(result, self.seq.image_size)
     }
 }
 
@@ -488,8 +546,8 @@ pub fn track_offline(
     frames: &[Vec<Detection>],
     mut progress: impl FnMut(Progress),
 ) -> Result<OfflineResult, OfflineError> {
-    let mut t = OfflineTracker::new(config.clone(), seq.fps)?;
-    t.seq.image_size = seq.image_size;
+    let mut t =
+        OfflineTracker::new(config.clone(), seq.fps)?.with_sequence_image_size(seq.image_size);
     let n = frames.len().max(1) as f64;
     for (k, dets) in frames.iter().enumerate() {
         if k % 16 == 0 {
