@@ -15,13 +15,14 @@
 //! public is re-exported here, so the JS API and `shapetrack::wasm::*` are one flat namespace:
 //! `frame` (frame buffers, boxes, masks), `annotations` (file formats), `detect` (detections,
 //! background detector), `options` (tracker settings), `offline` (offline-pass settings,
-//! progress, result), `tracker`, `synth` (the demo scene), `eval` (metrics), and `error` (how
+//! progress, result), `tracker`, `synth` (the demo scene), `eval` (metrics), `follow` (following one given shape, keyframe interpolation), and `error` (how
 //! failures become JS `Error`s; not exported).
 
 mod annotations;
 mod detect;
 mod error;
 mod eval;
+mod follow;
 mod frame;
 mod offline;
 mod options;
@@ -31,6 +32,7 @@ mod tracker;
 pub use annotations::*;
 pub use detect::*;
 pub use eval::*;
+pub use follow::*;
 pub use frame::*;
 pub use offline::*;
 pub use options::*;

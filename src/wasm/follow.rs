@@ -1,0 +1,166 @@
+//! Following one shape the user gave (`Follower`: the core's `follow::Follower`, frame by
+//! frame in either direction) and shape-aware interpolation between two keyframe masks
+//! (`interpolateMasks`). Masks cross the boundary as compressed RLE of the whole frame.
+
+use super::*;
+use crate::follow::{interpolate_masks, FollowConfig, Follower as CoreFollower};
+use crate::io::Rle;
+use serde::{Deserialize, Serialize};
+use tsify::{Ts, Tsify};
+use wasm_bindgen::prelude::*;
+
+/// Settings of the follower; every field is optional and keeps the core's default
+/// (`follow::FollowConfig`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
+#[serde(default, deny_unknown_fields)]
+pub struct FollowOptions {
+    /// Longest side, in pixels, of the images the follower works on (bounds the work per
+    /// frame).
+    #[tsify(optional)]
+    pub max_side: Option<u32>,
+    /// Search margin around the predicted box, as a fraction of its longer side.
+    #[tsify(optional)]
+    pub search_margin: Option<f64>,
+    /// Below this confidence a frame counts as lost.
+    #[tsify(optional)]
+    pub lost_confidence: Option<f64>,
+    /// Lost frames in a row after which the follower stops.
+    #[tsify(optional)]
+    pub max_lost: Option<u32>,
+    /// A detection whose mask IoU with the followed mask reaches this replaces it.
+    #[tsify(optional)]
+    pub detection_iou: Option<f64>,
+}
+
+impl FollowOptions {
+    fn into_core(self) -> FollowConfig {
+        let d = FollowConfig::default();
+        FollowConfig {
+            max_side: self.max_side.unwrap_or(d.max_side),
+            search_margin: self.search_margin.unwrap_or(d.search_margin),
+            lost_confidence: self.lost_confidence.unwrap_or(d.lost_confidence),
+            max_lost: self.max_lost.map_or(d.max_lost, |v| v as usize),
+            detection_iou: self.detection_iou.unwrap_or(d.detection_iou),
+            ..d
+        }
+    }
+}
+
+/// The follower's result for one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
+pub struct FollowStepJs {
+    /// The target's mask in this frame; absent once the follower has stopped.
+    pub mask: Option<RleJs>,
+    /// The mask's box; absent with the mask.
+    pub bbox: Option<BoxJs>,
+    /// Confidence in `[0, 1]`.
+    pub confidence: f64,
+    /// Not found confidently here: the mask is a prediction.
+    pub lost: bool,
+    /// The follower gave up (too many lost frames in a row) and reports nothing more.
+    pub stopped: bool,
+    /// A detection's mask was taken for this frame.
+    pub from_detection: bool,
+}
+
+/// Follows one target from the mask given on a first frame. Feed it the frames in the
+/// direction of travel (forward or backward), one `step` per frame; start a second follower
+/// on the same first frame for the other direction.
+#[wasm_bindgen]
+pub struct Follower {
+    inner: CoreFollower,
+    width: u32,
+    height: u32,
+}
+
+#[wasm_bindgen]
+impl Follower {
+    /// Starts from `mask` (RLE of the whole frame, the buffer's size) on the frame in `buf`.
+    /// An empty mask, a mask of another size or bad settings are errors.
+    #[wasm_bindgen(constructor)]
+    pub fn new(
+        buf: &FrameBuffer,
+        mask: Ts<RleJs>,
+        options: Option<Ts<FollowOptions>>,
+    ) -> Result<Follower, JsValue> {
+        let rle = rust(mask)?.to_rle()?;
+        let (width, height) = (buf.width(), buf.height());
+        if (rle.width, rle.height) != (width, height) {
+            return Err(js_error(BindingError::Invalid(format!(
+                "the mask is {}x{}, the frame {width}x{height}",
+                rle.width, rle.height
+            ))));
+        }
+        let cfg = match options {
+            Some(o) => settings(o)?.into_core(),
+            None => FollowConfig::default(),
+        };
+        let frame = buf.frame()?;
+        let inner = CoreFollower::new(&frame, &rle.to_mask(), cfg).map_err(js_error)?;
+        Ok(Follower {
+            inner,
+            width,
+            height,
+        })
+    }
+
+    /// Follows the target into the frame in `buf` (the next one in the direction of travel),
+    /// from the pixels alone.
+    pub fn step(&mut self, buf: &FrameBuffer) -> Result<Ts<FollowStepJs>, JsValue> {
+        self.advance(buf, &[])
+    }
+
+    /// As `step`, preferring a detection whose mask agrees with the followed one.
+    #[wasm_bindgen(js_name = stepWith)]
+    pub fn step_with(
+        &mut self,
+        buf: &FrameBuffer,
+        detections: &Detections,
+    ) -> Result<Ts<FollowStepJs>, JsValue> {
+        self.advance(buf, &detections.inner)
+    }
+
+    /// Whether the follower has stopped.
+    #[wasm_bindgen(getter)]
+    pub fn stopped(&self) -> bool {
+        self.inner.stopped()
+    }
+}
+
+impl Follower {
+    fn advance(
+        &mut self,
+        buf: &FrameBuffer,
+        dets: &[crate::frame::Detection],
+    ) -> Result<Ts<FollowStepJs>, JsValue> {
+        let frame = buf.frame()?;
+        let s = self.inner.step(&frame, dets).map_err(js_error)?;
+        let has = !s.stopped && !s.mask.is_empty();
+        let rle = has.then(|| Rle::from_mask(&s.mask, self.width, self.height));
+        ts(&FollowStepJs {
+            bbox: rle.as_ref().map(|r| r.bbox().into()),
+            mask: rle.as_ref().map(RleJs::from),
+            confidence: s.confidence,
+            lost: s.lost,
+            stopped: s.stopped,
+            from_detection: s.from_detection,
+        })
+    }
+}
+
+/// The mask at `t ∈ [0, 1]` between keyframe masks `a` (t = 0) and `b` (t = 1) of one frame
+/// size: their outlines matched point to point (shape context) and moved linearly, not a box
+/// blend.
+#[wasm_bindgen(js_name = interpolateMasks)]
+pub fn interpolate_masks_js(a: Ts<RleJs>, b: Ts<RleJs>, t: f64) -> Result<Ts<RleJs>, JsValue> {
+    let (a, b) = (rust(a)?.to_rle()?, rust(b)?.to_rle()?);
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(js_error(BindingError::Invalid(format!(
+            "keyframe masks of different sizes: {}x{} and {}x{}",
+            a.width, a.height, b.width, b.height
+        ))));
+    }
+    let m =
+        interpolate_masks(&a.to_mask(), &b.to_mask(), t, a.width, a.height).map_err(js_error)?;
+    ts(&RleJs::from(&Rle::from_mask(&m, a.width, a.height)))
+}
