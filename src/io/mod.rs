@@ -237,6 +237,17 @@ pub fn image_files(dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, IoE
     Ok(files)
 }
 
+/// Reads an image file (PNG or JPEG) as RGB8; a file that cannot be read or decoded is an
+/// error naming it. What the commands that take a frame folder read each frame with.
+pub fn read_rgb(path: &std::path::Path) -> Result<image::RgbImage, IoError> {
+    image::open(path)
+        .map(|i| i.to_rgb8())
+        .map_err(|e| IoError::Image {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        })
+}
+
 /// Compares names as people number files: runs of digits by value, the rest by character.
 pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
     use std::cmp::Ordering;

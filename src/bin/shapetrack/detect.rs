@@ -17,7 +17,7 @@ use shapetrack::detect::{
     MovingCameraDetector, MovingConfig, RefineConfig,
 };
 use shapetrack::io::motchallenge::{parse_mot, write_mots};
-use shapetrack::io::{image_files, read_text, write_text, IoError, Record, Rle};
+use shapetrack::io::{image_files, read_rgb, read_text, write_text, IoError, Record, Rle};
 use shapetrack::{Detection, Frame};
 use std::path::{Path, PathBuf};
 
@@ -96,16 +96,6 @@ pub enum DetectCliError {
         #[source]
         source: DetectError,
     },
-}
-
-/// Loads a frame as RGB8, naming the file on failure.
-pub fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
-    image::open(path)
-        .map(|i| i.to_rgb8())
-        .map_err(|e| IoError::Image {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })
 }
 
 /// A detector chosen by [`Kind`], run frame by frame.
@@ -252,7 +242,7 @@ pub fn run(args: Args) -> crate::CliResult {
     let mut first: Option<(u32, u32)> = None;
     for (i, path) in files.iter().enumerate() {
         let n = i as u32 + 1;
-        let img = load_rgb(path)?;
+        let img = read_rgb(path)?;
         let (w, h) = img.dimensions();
         let (fw, fh) = *first.get_or_insert((w, h));
         if (w, h) != (fw, fh) {

@@ -15,9 +15,9 @@
 //!
 //! Speed: frames per second of each detector's own work (decoding excluded), one thread.
 
-use crate::detect::{load_rgb, Kind, Runner};
+use crate::detect::{Kind, Runner};
 use shapetrack::detect::{refine_box, RefineConfig};
-use shapetrack::io::{image_files, IoError};
+use shapetrack::io::{image_files, read_rgb, IoError};
 use shapetrack::{Frame, Mask};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -123,7 +123,7 @@ fn load(root: &Path, seq_dir: &Path) -> Result<Seq, Box<dyn std::error::Error>> 
             .join("DAVIS/Annotations/480p")
             .join(&name)
             .join(format!("{}.png", stem.unwrap_or_default()));
-        frames.push(load_rgb(f)?);
+        frames.push(read_rgb(f)?);
         gt.push(gt_mask(&g)?);
     }
     Ok(Seq { name, frames, gt })

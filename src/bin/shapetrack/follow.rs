@@ -19,7 +19,7 @@ use shapetrack::io::motchallenge::write_mots;
 use shapetrack::io::png_masks::{read_png_mask_dir, EightBit};
 use shapetrack::io::rle::Rle;
 use shapetrack::io::vot::{parse_anchor_values, read_regions, write_regions, Direction, Region};
-use shapetrack::io::{image_files, write_text, Record};
+use shapetrack::io::{image_files, read_rgb, write_text, Record};
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -66,12 +66,6 @@ pub struct Args {
     /// Print each frame's confidence, lost flag, inliers (and IoU with --gt).
     #[arg(long)]
     verbose: bool,
-}
-
-fn load_rgb(path: &Path) -> Result<RgbImage, Box<dyn std::error::Error>> {
-    Ok(image::open(path)
-        .map_err(|e| format!("{}: {e}", path.display()))?
-        .to_rgb8())
 }
 
 fn frame_of(img: &RgbImage) -> Result<Frame<'_>, Box<dyn std::error::Error>> {
@@ -161,7 +155,7 @@ pub fn run(args: Args) -> crate::CliResult {
         .into());
     }
     let init = args.init_frame - 1;
-    let first = load_rgb(&files[init])?;
+    let first = read_rgb(&files[init])?;
     let (w, h) = first.dimensions();
     let mask = read_mask_png(&args.init, w, h)?;
     let frame0 = frame_of(&first)?;
@@ -193,7 +187,7 @@ pub fn run(args: Args) -> crate::CliResult {
             if travel.follower.stopped() {
                 break;
             }
-            let img = load_rgb(&files[i])?;
+            let img = read_rgb(&files[i])?;
             if img.dimensions() != (w, h) {
                 return Err(format!(
                     "{}: {}x{}, but the frames are {w}x{h}",
@@ -394,7 +388,7 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
     }
     let imgs = files
         .iter()
-        .map(|p| load_rgb(p))
+        .map(|p| read_rgb(p))
         .collect::<Result<Vec<_>, _>>()?;
     let (w, h) = imgs[0].dimensions();
     if imgs.iter().any(|i| i.dimensions() != (w, h)) {

@@ -144,15 +144,6 @@ fn scalabel_detections(
     Ok((name, records, cats))
 }
 
-fn load_rgb(path: &Path) -> Result<image::RgbImage, IoError> {
-    image::open(path)
-        .map(|i| i.to_rgb8())
-        .map_err(|e| IoError::Image {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })
-}
-
 /// What a first pass over a MOT/MOTS text file found, without keeping its records.
 struct Scan {
     /// Whether frame numbers never decrease from line to line (then the tracker reads the
@@ -668,7 +659,7 @@ pub fn run(args: Args) -> crate::CliResult {
                 dets: &[shapetrack::frame::Detection]|
      -> crate::CliResult {
         let img = match images.as_ref().and_then(|v| v.get(k as usize)) {
-            Some(p) => Some(load_rgb(p)?),
+            Some(p) => Some(shapetrack::io::read_rgb(p)?),
             None => None,
         };
         let frame = img
