@@ -2,6 +2,7 @@
 
 use crate::features::transform::Transform;
 use crate::frame::{Mask, Point};
+use crate::synth::raster::Rasterizer;
 
 /// `mask` mapped by `t` (source → target image coordinates), sampled at the target pixel
 /// centres by inverse mapping (nearest source pixel), clipped to the `img_w × img_h` frame.
@@ -53,48 +54,32 @@ pub fn warp_mask(mask: &Mask, t: &Transform, img_w: u32, img_h: u32) -> Mask {
 /// Fills the polygon (even–odd rule, pixel centres) into an `img_w × img_h` frame. Fewer than
 /// three vertices, or non-finite ones, give an empty mask.
 pub fn rasterize_polygon(poly: &[Point], img_w: u32, img_h: u32) -> Mask {
-    if poly.len() < 3 || poly.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+    if poly.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
         return Mask::empty();
     }
-    let (mut y0, mut y1, mut x0, mut x1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for p in poly {
-        y0 = y0.min(p.y);
-        y1 = y1.max(p.y);
-        x0 = x0.min(p.x);
-        x1 = x1.max(p.x);
-    }
-    let gx0 = (x0.floor().max(0.0) as u32).min(img_w);
-    let gx1 = (x1.ceil().max(0.0) as u32).min(img_w);
-    let gy0 = (y0.floor().max(0.0) as u32).min(img_h);
-    let gy1 = (y1.ceil().max(0.0) as u32).min(img_h);
-    if gx1 <= gx0 || gy1 <= gy0 {
+    // The synthetic scenes' scanline filler (pixel centres, half-open edges), clipped here.
+    let pts: Vec<[f64; 2]> = poly.iter().map(|p| [p.x, p.y]).collect();
+    let w = img_w.min(i32::MAX as u32) as i32;
+    let mut spans: Vec<(i32, i32, i32)> = Vec::new();
+    Rasterizer::default().spans(&pts, 0..img_h.min(i32::MAX as u32) as i32, |y, a, b| {
+        let (a, b) = (a.max(0), b.min(w));
+        if b > a {
+            spans.push((y, a, b));
+        }
+    });
+    let (Some(first), Some(last)) = (spans.first(), spans.last()) else {
         return Mask::empty();
+    };
+    let (y0, y1) = (first.0, last.0 + 1);
+    let x0 = spans.iter().map(|s| s.1).min().unwrap_or(0);
+    let x1 = spans.iter().map(|s| s.2).max().unwrap_or(0);
+    let width = (x1 - x0) as usize;
+    let mut data = vec![0u8; width * (y1 - y0) as usize];
+    for &(y, a, b) in &spans {
+        let row = (y - y0) as usize * width;
+        data[row + (a - x0) as usize..row + (b - x0) as usize].fill(1);
     }
-    let (w, h) = ((gx1 - gx0) as usize, (gy1 - gy0) as usize);
-    let mut data = vec![0u8; w * h];
-    let mut xs = Vec::new();
-    for row in 0..h {
-        let yc = (gy0 as usize + row) as f64 + 0.5;
-        xs.clear();
-        for i in 0..poly.len() {
-            let a = poly[i];
-            let b = poly[(i + 1) % poly.len()];
-            // Half-open in y so a vertex on the scanline is counted once.
-            if (a.y <= yc) != (b.y <= yc) {
-                xs.push(a.x + (yc - a.y) / (b.y - a.y) * (b.x - a.x));
-            }
-        }
-        xs.sort_by(f64::total_cmp);
-        for pair in xs.chunks_exact(2) {
-            // Pixel centres x + 0.5 within [pair[0], pair[1]).
-            let from = ((pair[0] - 0.5).ceil().max(gx0 as f64) as i64 - gx0 as i64).max(0) as usize;
-            let to = ((pair[1] - 0.5).ceil().min(gx1 as f64) as i64 - gx0 as i64).max(0) as usize;
-            if to > from {
-                data[row * w + from..row * w + to.min(w)].fill(1);
-            }
-        }
-    }
-    Mask::new(gx0 as i32, gy0 as i32, w as u32, h as u32, data)
+    Mask::new(x0, y0, width as u32, (y1 - y0) as u32, data)
         .map(|m| m.tight())
         .unwrap_or_else(|_| Mask::empty())
 }

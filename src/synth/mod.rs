@@ -39,7 +39,8 @@
 mod background;
 pub(crate) mod math;
 pub(crate) mod noise;
-mod raster;
+// The follower fills warped outlines with the same scanline rule.
+pub(crate) mod raster;
 mod shape;
 
 pub use shape::ShapeKind;
