@@ -1,9 +1,9 @@
-import type { TrackerConfig, BackgroundOptions, DetectionLists, Shapes, OfflineOutput, Records } from './pkg/shapetrack.js';
+import type { TrackerSettings, BackgroundSettings, DetectionLists, Shapes, OfflineOutput, Records } from './pkg/shapetrack.js';
 
 /** How the worker's tracker starts. */
 export interface TrackerWorkerOptions {
   /** Tracker settings over a preset (`{ preset: 'masks' }` for masks with frames). */
-  tracker?: TrackerConfig;
+  tracker?: TrackerSettings;
   /** Keep what the offline pass needs, so `finish()` can re-link broken tracks. */
   offline?: boolean;
   /** Frame rate of the video (offline pass; default 25). */
@@ -11,7 +11,7 @@ export interface TrackerWorkerOptions {
   /** `'background'` (default): the adaptive background subtractor runs on each frame; `'none'`: pass detections to `track()`. */
   detector?: 'background' | 'none';
   /** Background subtractor settings. */
-  background?: BackgroundOptions;
+  background?: BackgroundSettings;
   /** Where the .wasm is, when not next to the package's files. */
   wasm?: URL | string;
 }

@@ -21,6 +21,8 @@
 //! - [`eval`]: MOT (CLEAR, Identity, HOTA) and VOT (accuracy, robustness, EAO) metrics.
 //! - [`io`]: MOTChallenge, MOTS, COCO-video, CVAT XML, PNG masks, VOT files.
 //! - [`synth`]: deterministic synthetic scenes with ground truth.
+//! - [`settings`]: partial JSON settings over any config (CLI files, JS objects), errors
+//!   naming the field.
 //! - `grid` (native only): the robustness grid — datasets × detector models × trackers.
 //!
 //! The core never imports wasm-bindgen; the browser bindings live in `wasm` (wasm32 only).
@@ -38,6 +40,7 @@ pub mod grid;
 pub mod io;
 pub mod motion;
 pub mod region;
+pub mod settings;
 pub mod synth;
 pub mod track;
 

@@ -131,6 +131,7 @@ pub trait MotionFactory {
 }
 
 /// Noise parameters of [`BoxKalman`], as fractions of the box size (see the module docs).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct BoxKalmanParams {

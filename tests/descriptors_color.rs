@@ -1,4 +1,7 @@
 //! Spatial colour analyser and the colour cost C2 (`features::color`).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::features::color::*;
 use shapetrack::features::transform::{Similarity, Transform, Translation};

@@ -1,4 +1,7 @@
 //! Shape context descriptor and the shape cost C1 (`features::shape_context`).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;

@@ -1,4 +1,7 @@
 //! The background subtractor on synthetic scenes whose ground truth is exact.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::detect::{
     BackgroundConfig, BackgroundSubtractor, DetectError, Detector, UpdatePolicy,

@@ -1,6 +1,9 @@
 //! Instance masks without a segmentation model (issue 11): box → mask refinement on a generated
 //! image, the moving-camera detector on a generated panning scene, and `shapetrack detect` end
 //! to end with its error paths. Quality only; speed is measured by `shapetrack detect-eval`.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::detect::{
     refine_box, CameraJudge, Detector, MovingCameraDetector, MovingConfig, RefineConfig,

@@ -1,4 +1,7 @@
 //! `shapetrack eval` end to end: flags other tools rely on, the table, and the JSON file.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};

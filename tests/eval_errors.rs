@@ -1,5 +1,8 @@
 //! Malformed inputs give typed errors naming file and line, through the library and through
 //! `shapetrack eval` (exit status and message); never a panic.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::eval::{evaluate, EvalConfig, EvalError, Problem, SequenceInput, Side};
 use shapetrack::io::layout::{discover, load_sequence, Format};

@@ -1,5 +1,8 @@
 //! Our MOT figures against TrackEval's: published tables in ../shared/data and fixtures made
 //! with the real TrackEval by tests/data/eval/make_fixtures.py.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use serde_json::Value;
 use shapetrack::eval::{evaluate, EvalConfig, SequenceInput};

@@ -1,6 +1,9 @@
 //! Following a user-given shape (issue 12): the core follower on a generated sequence, shape-
 //! aware interpolation against a box lerp, the `follow` CLI's MOTS output and its errors.
 //! Everything is generated here (small frames), so each test takes a few seconds in debug.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::follow::{
     follow_sequence, interpolate_masks, rasterize_polygon, FollowConfig, FollowError,

@@ -1,4 +1,7 @@
 //! COCO-video / YouTube-VIS JSON: pycocotools cross-check, round trips, malformed input.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::coco_video::{
     parse_coco_video, parse_coco_video_results, write_coco_video, write_coco_video_results,

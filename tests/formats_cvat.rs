@@ -1,4 +1,7 @@
 //! CVAT for video 1.1 XML: a hand-made fixture, round trips, malformed files.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::cvat::{parse_cvat, write_cvat, CvatMeta};
 use shapetrack::io::{IoError, Record, Rle};

@@ -1,4 +1,7 @@
 //! Random bytes and mutated valid files fed to every reader: Ok or a typed error, never a panic.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use proptest::prelude::*;
 use shapetrack::io::coco_video::{parse_coco_video, parse_coco_video_results};

@@ -1,6 +1,9 @@
 //! Label Studio video JSON: records round-trip through the writer and reader (boxes, ids,
 //! classes, gaps, filled frames), keyframes expand as Label Studio shows them, and bad files
 //! get typed errors at the right place, never a panic.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use std::collections::BTreeMap;
 

@@ -1,4 +1,7 @@
 //! 16-bit PNG instance maps and DAVIS 8-bit binary masks.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::png_masks::{
     decode_png_masks, encode_png_masks, read_png_mask_dir, read_png_masks, write_png_mask_dir,

@@ -1,6 +1,9 @@
 //! Scalabel JSON (BDD100K): the four sample files round-trip, convert to records with the
 //! documented conventions, records round-trip through the writer, and bad input gets typed
 //! errors at the right place, never a panic.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::scalabel::{
     from_records, parse_scalabel, split_videos, to_records, write_scalabel, Categories, IdMap,

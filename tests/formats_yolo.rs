@@ -1,6 +1,9 @@
 //! YOLO-style txt with track ids: records round-trip through the single-file and the
 //! per-frame (Ultralytics) forms, Ultralytics' own lines read as documented, and bad input
 //! gets typed errors at the right line and field, never a panic.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::yolo::{parse_yolo, parse_yolo_frame, write_yolo, write_yolo_frames};
 use shapetrack::io::{IoError, Record};

@@ -16,6 +16,9 @@
 //! Overflow checks stay on (debug, or the release profile with them turned on): an arithmetic
 //! overflow that would silently wrap in a release build is a finding too. An input that
 //! panics or is slow is written to `target/fuzz-findings/` and fails the test.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;

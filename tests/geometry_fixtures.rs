@@ -1,5 +1,8 @@
 //! Contours, moments and edges against references: OpenCV fixtures (made by
 //! `tests/data/geometry/make_opencv_fixture.py`) and shapes with known answers.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use serde::Deserialize;
 use shapetrack::geometry::{mask_geometry, GeometryConfig, MaskCrop, Moments, CROP_PAD};

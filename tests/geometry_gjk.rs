@@ -1,4 +1,7 @@
 //! GJK (parry2d and the thesis' Algorithm 2) against a brute-force polygon intersection test.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 mod common;
 

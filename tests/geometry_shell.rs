@@ -1,4 +1,7 @@
 //! Convex shells: hull invariants, growing, and the per-mask geometry's containment guarantees.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 mod common;
 

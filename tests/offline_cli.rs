@@ -1,6 +1,9 @@
 //! `shapetrack track --offline` end to end: box mode on a MOT15 sequence in every output
 //! format (the interpolated flag must survive the COCO-video and CVAT exports), mask mode with
 //! frames on a synthetic occlusion scene, and the offline flags' error paths.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::coco_video::parse_coco_video;
 use shapetrack::io::cvat::parse_cvat;

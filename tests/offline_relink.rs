@@ -2,6 +2,9 @@
 //! hand computation, a broken track re-joined and filled, two objects crossing in a shared gap
 //! (min-cost matching right where the thesis' greedy order fails), no joins across overlaps,
 //! chains, and a property test of what the pass may and may not change.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use proptest::prelude::*;
 use shapetrack::frame::{BBox, Detection, Point, TrackState, TrackedShape};

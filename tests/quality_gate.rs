@@ -27,6 +27,9 @@
 //!
 //! rewrites the baseline (the bars are still checked); review the diff and commit it with the
 //! change, saying why the scores moved.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use serde::{Deserialize, Serialize};
 use shapetrack::grid::{self, datasets, Cell, CellData, Dataset, Input, Mode, Tracking};

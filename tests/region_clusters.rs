@@ -1,5 +1,8 @@
 //! The region estimator: broad phase + GJK equals all-pairs GJK, and clusters are exactly the
 //! connected components of the pair graph.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 mod common;
 

@@ -7,6 +7,9 @@
 //!
 //! Pairing: an OpenCV keypoint is *paired* with ours when one of ours lies within 0.1 px with
 //! the same octave, a size within 1 % and an angle within 1°.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use image::GrayImage;
 use serde_json::Value;

@@ -14,6 +14,9 @@
 //!   of `T(p)` of their A keypoint;
 //! - **repeatable-match rate** = correct matches / candidates (required ≥ 60 %);
 //! - **precision** = correct matches / matches (required ≥ 90 %).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use image::{GrayImage, Luma, Rgb, RgbImage};
 use rand::{Rng, SeedableRng};

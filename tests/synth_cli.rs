@@ -1,5 +1,8 @@
 //! `shapetrack synth` writes a MOTChallenge-layout sequence that reads back with the project's
 //! own readers and matches the in-memory scene exactly.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, SeqInfo};
 use shapetrack::io::read_text;

@@ -1,5 +1,8 @@
 //! The synthetic scenario families (`SynthConfig::family`): each family's defining stress is
 //! measured on its generated ground truth, and every family is deterministic.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::synth::{Family, GtObject, Scene, SynthConfig};
 use std::collections::BTreeMap;

@@ -1,5 +1,8 @@
 //! Properties of the synthetic scene generator: determinism, exact ground truth, occlusion
 //! timing, the detection noise model.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::synth::{
     BorderPolicy, NoiseConfig, OccluderRect, Scene, ScriptedShape, SynthConfig, SynthFrame,

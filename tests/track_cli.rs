@@ -3,6 +3,9 @@
 //! or careless input: sizes and frame numbers a few bytes can declare, outputs that would
 //! destroy inputs, missing frames, masks of the wrong size; memory that stays flat over a long
 //! video (the online output streams).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::frame::Mask;
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mots};
@@ -60,6 +63,11 @@ fn box_mode_on_a_mot15_sequence() {
     let o = track(&["--det", s(&det), "--out", s(&out2), "--config", s(&cfg)]);
     assert!(o.status.success());
     assert!(read_text(&out2).unwrap().is_empty());
+    // A config file may name its preset, as the browser's settings objects do.
+    std::fs::write(&cfg, r#"{"preset": "masks", "min_hits": 1000}"#).unwrap();
+    let o = track(&["--det", s(&det), "--out", s(&out2), "--config", s(&cfg)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(read_text(&out2).unwrap().is_empty());
 }
 
 #[test]
@@ -87,6 +95,20 @@ fn flag_errors_are_reported_not_panicked() {
     let o = track(&["--det", s(&det), "--out", s(&out), "--config", s(&cfg)]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("max_lots"));
+    // The same settings objects as the browser's: a "preset" field, errors naming the field.
+    for (text, field) in [
+        (r#"{"preset": "mask"}"#, "preset"),
+        (
+            r#"{"terms": {"iou": {"weight": "heavy"}}}"#,
+            "terms.iou.weight",
+        ),
+    ] {
+        std::fs::write(&cfg, text).unwrap();
+        let o = track(&["--det", s(&det), "--out", s(&out), "--config", s(&cfg)]);
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(field), "{text}: {err}");
+    }
 
     let bad = dir.join("bad_det.txt");
     std::fs::write(&bad, "1,-1,0,0,nan,10,0.9\n").unwrap();

@@ -2,6 +2,9 @@
 //! ground-truth masks given as detections, so the mask pipeline (shells, regions, SIFT and
 //! colour on real pixels) runs on a real video. The single object must keep one id for all
 //! 40 frames, with the mask preset and with the thesis' cost (shape context C1 on too).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::io::png_masks::{read_png_mask_dir, EightBit};
 use shapetrack::track::{detections_by_frame, Config, TermConfig, Tracker};

@@ -1,4 +1,7 @@
 //! Track lifecycle, id ownership, input validation and cost-term plumbing of the online tracker.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use proptest::prelude::*;
 use shapetrack::frame::{BBox, Detection, Mask, TrackState, TrackedShape};

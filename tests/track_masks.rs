@@ -1,6 +1,9 @@
 //! Tracker-level tests of the mask pipeline: region estimation on predicted shells, pairs
 //! scored only inside clusters, appearance computed only where needed, re-identification
 //! after an occlusion, and bad input.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::frame::{BBox, Detection, Frame, Mask, Point, TrackedShape};
 use shapetrack::synth::{

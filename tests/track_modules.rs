@@ -3,6 +3,9 @@
 //! (`super::lifecycle::Track`, `crate::track::config::Config`), or names an item the parent
 //! `mod.rs` re-exports from it (`super::Config` is `config`'s). `offline/` counts as one
 //! module. Comments and doc links are not dependencies.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

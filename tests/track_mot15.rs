@@ -1,6 +1,9 @@
 //! The online tracker on all eleven MOT15-train sequences (box mode, `det/det.txt`), with the
 //! default configuration: the output must be well-formed, and its scores (our metrics, which
 //! equal TrackEval's) must beat the peers run on the same detections.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::eval::{evaluate, EvalConfig, SequenceInput};
 use shapetrack::frame::BBox;

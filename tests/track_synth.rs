@@ -7,6 +7,9 @@
 //! The first test checks that the scenes really are what the acceptance describes; the second
 //! that the tracker (default mask preset, frames given) reaches IDF1 ≥ 0.90 and HOTA ≥ 0.80 on
 //! every seed and combined.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::eval::{evaluate, EvalConfig, Preprocessing, SequenceInput, Similarity};
 use shapetrack::synth::{Scene, SynthConfig, SynthFrame};

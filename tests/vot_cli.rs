@@ -1,4 +1,7 @@
 //! `shapetrack eval-vot` end to end on the toolkit fixture.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use std::process::Command;
 

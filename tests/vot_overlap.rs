@@ -1,5 +1,8 @@
 //! Property tests of region overlap: rotated boxes, polygons (convex, non-convex,
 //! self-intersecting) against a pixel-count brute force, masks, bounds.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use proptest::prelude::*;
 use shapetrack::eval::vot::{overlap, region_area, OverlapMethod};

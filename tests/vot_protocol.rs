@@ -1,4 +1,7 @@
 //! VOT protocols checked against hand computations (bag ground truth and synthetic sequences).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::eval::vot::{
     anchor_frames, anchors_every, evaluate_anchor_sequence, evaluate_reset_sequence,

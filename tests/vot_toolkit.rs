@@ -1,6 +1,9 @@
 //! Our VOT metrics against the official VOT toolkit (vot-toolkit 0.9.0) on the real "bag"
 //! sequence: the reference numbers and result files were produced by
 //! `tests/data/vot/make_toolkit_fixture.py` (see its doc for the trackers).
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::eval::vot::{
     anchor_frames, anchors_every, evaluate_anchor_sequence, evaluate_reset_sequence,

@@ -24,6 +24,11 @@ fn ts<T: tsify::Tsify>(v: JsValue) -> Ts<T> {
     Ts::new_unchecked(v)
 }
 
+/// A settings object (`TrackerSettings`, `OfflineSettings`, …) as a JS caller passes it.
+fn settings<T: JsCast>(v: &serde_json::Value) -> T {
+    js(v).unchecked_into()
+}
+
 /// The message of a JS `Error`; fails the test for anything else.
 fn error_message(e: JsValue) -> String {
     let err: js_sys::Error = e.dyn_into().expect("a JS Error object");
@@ -344,83 +349,94 @@ fn scene(preset: &str) -> SynthScene {
 }
 
 #[wasm_bindgen_test]
-fn tracker_config_type_mirrors_the_core_config_exactly() {
-    // Every core field is known to the mirror (deny_unknown_fields), and every mirror field
-    // exists in the core (the re-serialised mirror equals the core's JSON).
-    let core = serde_json::to_value(shapetrack::track::Config::default()).unwrap();
-    let mirror: TrackerConfig = serde_json::from_value(core.clone()).unwrap();
-    assert_eq!(serde_json::to_value(&mirror).unwrap(), core);
-    assert_eq!(
-        mirror.to_core().unwrap(),
-        shapetrack::track::Config::default()
+fn every_field_of_the_core_configs_is_a_valid_setting() {
+    use shapetrack::track::Config;
+    // The settings are the core's own config types (partial JSON over a preset), so the
+    // complete serialised configs, every field named, are accepted as they are.
+    for cfg in [Config::default(), Config::masks()] {
+        let v = serde_json::to_value(&cfg).unwrap();
+        assert!(Tracker::new(Some(settings(&v)), None).is_ok(), "{v}");
+    }
+    let mut offline =
+        serde_json::to_value(shapetrack::track::offline::OfflineConfig::default()).unwrap();
+    let map = offline.as_object_mut().unwrap();
+    map.remove("online");
+    map.insert("fps".into(), serde_json::json!(25));
+    assert!(
+        Tracker::new(None, Some(settings(&offline))).is_ok(),
+        "{offline}"
     );
+    let bg =
+        serde_json::to_value(shapetrack::detect::background::BackgroundConfig::default()).unwrap();
+    assert!(BackgroundDetector::new(Some(settings(&bg))).is_ok(), "{bg}");
 }
 
 #[wasm_bindgen_test]
-fn mask_preset_is_reachable_from_js_and_overridable() {
-    use shapetrack::track::Config;
-    // The whole mask preset round-trips through the mirror too (its nested appearance parts).
-    let core = serde_json::to_value(Config::masks()).unwrap();
-    let mirror: TrackerConfig = serde_json::from_value(core.clone()).unwrap();
-    assert_eq!(serde_json::to_value(&mirror).unwrap(), core);
-    assert_eq!(mirror.to_core().unwrap(), Config::masks());
-    // `preset: "masks"` starts from the preset; named fields (nested ones field by field)
-    // apply over it, not over the box-mode defaults.
-    let mirror: TrackerConfig =
-        serde_json::from_value(serde_json::json!({ "preset": "masks" })).unwrap();
-    assert_eq!(mirror.to_core().unwrap(), Config::masks());
-    let mirror: TrackerConfig = serde_json::from_value(serde_json::json!({
-        "preset": "masks", "high_score": 0.25, "reid_terms": { "colour": { "gate": 0.4 } }
-    }))
-    .unwrap();
-    let cfg = mirror.to_core().unwrap();
-    let masks = Config::masks();
-    assert_eq!(cfg.high_score, 0.25);
-    assert_eq!(cfg.reid_terms.colour.gate, Some(0.4));
-    assert_eq!(cfg.reid_terms.colour.weight, masks.reid_terms.colour.weight);
-    assert_eq!(cfg.max_lost, masks.max_lost);
-    assert!(cfg.lost_reid_only && cfg.merge_fragments);
-    assert_ne!(cfg.max_lost, Config::default().max_lost);
-    // Through the JS entry point; an unknown preset or nested field is an error.
+fn mask_preset_is_reachable_from_js_and_bad_settings_name_their_field() {
     assert!(Tracker::new(
-        Some(ts(js(&serde_json::json!({ "preset": "masks" })))),
+        Some(settings(&serde_json::json!({ "preset": "masks" }))),
         None
     )
     .is_ok());
-    for bad in [
-        serde_json::json!({ "preset": "mask" }),
-        serde_json::json!({ "preset": "masks", "appearance": { "lazzy": true } }),
-        serde_json::json!({ "shape_variant": "Fourier" }),
+    assert!(Tracker::new(
+        Some(settings(&serde_json::json!({
+            "preset": "masks", "high_score": 0.25, "reid_terms": { "colour": { "gate": 0.4 } }
+        }))),
+        None
+    )
+    .is_ok());
+    for (bad, field) in [
+        (serde_json::json!({ "preset": "mask" }), "preset"),
+        (
+            serde_json::json!({ "preset": "masks", "appearance": { "lazzy": true } }),
+            "lazzy",
+        ),
+        (
+            serde_json::json!({ "shape_variant": "Fourier" }),
+            "shape_variant",
+        ),
+        (
+            serde_json::json!({ "terms": { "iou": { "weight": "heavy" } } }),
+            "terms.iou.weight",
+        ),
+        (serde_json::json!({ "min_hits": -1 }), "min_hits"),
+        (
+            serde_json::json!({ "score_adaptation": { "window": 1.5 } }),
+            "score_adaptation.window",
+        ),
     ] {
-        assert!(
-            Tracker::new(Some(ts(js(&bad))), None).is_err(),
-            "{bad} accepted"
-        );
+        let msg = error_message(Tracker::new(Some(settings(&bad)), None).err().unwrap());
+        assert!(msg.contains(field), "{bad}: {msg}");
     }
 }
 
 #[wasm_bindgen_test]
-fn partial_tracker_config_overrides_only_what_it_names() {
+fn partial_tracker_settings_are_accepted() {
     let partial = serde_json::json!({ "max_lost": 60, "terms": { "iou": { "weight": 0.25 } } });
-    let mirror: TrackerConfig = serde_json::from_value(partial).unwrap();
-    let cfg = mirror.to_core().unwrap();
-    let def = shapetrack::track::Config::default();
-    assert_eq!(cfg.max_lost, 60);
-    assert_eq!(cfg.terms.iou.weight, 0.25);
-    assert_eq!(
-        cfg.terms.iou.gate, def.terms.iou.gate,
-        "absent gate keeps its default"
+    assert!(Tracker::new(Some(settings(&partial)), None).is_ok());
+    // `undefined` means "not given", as in JS; `null` turns an optional setting off.
+    let obj =
+        js(&serde_json::json!({ "score_adaptation": null, "terms": { "iou": { "gate": null } } }));
+    js_sys::Reflect::set(&obj, &"max_lost".into(), &JsValue::UNDEFINED).unwrap();
+    assert!(Tracker::new(Some(obj.unchecked_into()), None).is_ok());
+    // A value JSON cannot hold is an error, not a trap.
+    let obj = js(&serde_json::json!({}));
+    js_sys::Reflect::set(&obj, &"max_lost".into(), &js_sys::BigInt::from(3u32).into()).unwrap();
+    let msg = error_message(
+        Tracker::new(Some(obj.unchecked_into()), None)
+            .err()
+            .unwrap(),
     );
-    assert_eq!(cfg.min_hits, def.min_hits);
+    assert!(msg.contains("JSON"), "{msg}");
     // Through the JS entry point: a typo is an error, not silently ignored.
     let msg = error_message(
-        Tracker::new(Some(ts(js(&serde_json::json!({ "max_lots": 3 })))), None)
+        Tracker::new(Some(settings(&serde_json::json!({ "max_lots": 3 }))), None)
             .err()
             .unwrap(),
     );
     assert!(msg.contains("max_lots"), "{msg}");
     let msg = error_message(
-        Tracker::new(Some(ts(js(&serde_json::json!({ "min_hits": 0 })))), None)
+        Tracker::new(Some(settings(&serde_json::json!({ "min_hits": 0 }))), None)
             .err()
             .unwrap(),
     );
@@ -590,9 +606,24 @@ fn background_detector_finds_the_moving_shapes() {
         found = bg.detect(&buf).unwrap().len();
     }
     assert!(found >= 3, "{found} detections after the model settled");
-    let opts = serde_json::json!({ "connectivity": 6 });
-    let msg = error_message(BackgroundDetector::new(Some(ts(js(&opts)))).err().unwrap());
-    assert!(msg.contains("connectivity"), "{msg}");
+    for (opts, field) in [
+        (serde_json::json!({ "connectivity": 6 }), "connectivity"),
+        (serde_json::json!({ "alpha": 0 }), "alpha"),
+        (serde_json::json!({ "update": "sometimes" }), "update"),
+        (
+            serde_json::json!({ "shadow": { "max_chrome": 1 } }),
+            "max_chrome",
+        ),
+    ] {
+        let msg = error_message(
+            BackgroundDetector::new(Some(settings(&opts)))
+                .err()
+                .unwrap(),
+        );
+        assert!(msg.contains(field), "{opts}: {msg}");
+    }
+    let opts = serde_json::json!({ "connectivity": 4, "shadow": {}, "update": "all" });
+    assert!(BackgroundDetector::new(Some(settings(&opts))).is_ok());
 }
 
 #[wasm_bindgen_test]
@@ -609,7 +640,7 @@ fn evaluation_scores_perfect_and_broken_results() {
         ));
     }
     let scores = |res: &Vec<RecordJs>, opts: serde_json::Value| -> serde_json::Value {
-        let v = evaluate(ts(js(&gt)), ts(js(res)), 10, Some(ts(js(&opts)))).unwrap();
+        let v = evaluate(ts(js(&gt)), ts(js(res)), 10, Some(settings(&opts))).unwrap();
         serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap()
     };
     let perfect = scores(&gt, serde_json::json!({}));
@@ -643,7 +674,7 @@ fn evaluation_scores_perfect_and_broken_results() {
             ts(js(&gt)),
             ts(js(&gt)),
             10,
-            Some(ts(js(&serde_json::json!({ "similarity": "area" })))),
+            Some(settings(&serde_json::json!({ "similarity": "area" }))),
         )
         .err()
         .unwrap(),
@@ -655,38 +686,9 @@ fn evaluation_scores_perfect_and_broken_results() {
 // The offline pass from JS
 
 #[wasm_bindgen_test]
-fn offline_option_types_mirror_the_core_config_exactly() {
-    let core = serde_json::to_value(shapetrack::track::offline::OfflineConfig::default()).unwrap();
-    // Each mirrored part knows every core field (deny_unknown_fields) and no other.
-    let relink: RelinkOptions = serde_json::from_value(core["relink"].clone()).unwrap();
-    assert_eq!(serde_json::to_value(&relink).unwrap(), core["relink"]);
-    let fill: FillOptions = serde_json::from_value(core["fill"].clone()).unwrap();
-    assert_eq!(serde_json::to_value(&fill).unwrap(), core["fill"]);
-    let app: AppearanceOptions = serde_json::from_value(core["appearance"].clone()).unwrap();
-    assert_eq!(serde_json::to_value(&app).unwrap(), core["appearance"]);
-    let opts: OfflineOptions = serde_json::from_value(serde_json::json!({ "fps": 25 })).unwrap();
-    assert_eq!(
-        opts.to_core(shapetrack::track::Config::default()).unwrap(),
-        shapetrack::track::offline::OfflineConfig::default()
-    );
-    // A partial setting changes only what it names.
-    let opts: OfflineOptions = serde_json::from_value(
-        serde_json::json!({ "fps": 30, "relink": { "solver": "greedy" }, "fill": { "max_gap": 4 } }),
-    )
-    .unwrap();
-    let cfg = opts.to_core(shapetrack::track::Config::default()).unwrap();
-    assert_eq!(
-        cfg.relink.solver,
-        shapetrack::track::offline::JoinSolver::Greedy
-    );
-    assert_eq!(cfg.fill.max_gap, 4);
-    assert_eq!(cfg.relink.gate_base, 0.5);
-}
-
-#[wasm_bindgen_test]
 fn offline_options_are_checked() {
     let bad = |opts: serde_json::Value| -> String {
-        error_message(Tracker::new(None, Some(ts(js(&opts)))).err().unwrap())
+        error_message(Tracker::new(None, Some(settings(&opts))).err().unwrap())
     };
     assert!(bad(serde_json::json!({ "fps": 0 })).contains("fps"));
     assert!(bad(serde_json::json!({})).contains("fps"));
@@ -696,6 +698,19 @@ fn offline_options_are_checked() {
     assert!(msg.contains("relink.max_size_ratio"), "{msg}");
     let msg = bad(serde_json::json!({ "fps": 25, "width": 640 }));
     assert!(msg.contains("width/height"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "width": 640.5, "height": 480 }));
+    assert!(msg.contains("width"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": "25" }));
+    assert!(msg.contains("fps"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "fill": { "max_gap": "long" } }));
+    assert!(msg.contains("fill.max_gap"), "{msg}");
+    let msg = bad(serde_json::json!({ "fps": 25, "online": { "max_lost": 3 } }));
+    assert!(msg.contains("online"), "{msg}");
+    assert!(Tracker::new(
+        None,
+        Some(settings(&serde_json::json!({ "fps": 30, "relink": { "solver": "greedy" }, "fill": { "max_gap": 4 } })))
+    )
+    .is_ok());
     // An online tracker has no offline pass.
     let mut online = Tracker::new(None, None).unwrap();
     assert!(!online.offline());
@@ -723,7 +738,7 @@ fn mask_preset_from_js_reidentifies_shapes_after_occlusions() {
         let mut s = scene("occlusion");
         let (w, h, frames) = (s.width(), s.height(), s.frames());
         let mut buf = FrameBuffer::new(f64::from(w), f64::from(h)).unwrap();
-        let mut tracker = Tracker::new(Some(ts(js(&config))), None).unwrap();
+        let mut tracker = Tracker::new(Some(settings(&config)), None).unwrap();
         let mut gt = Vec::new();
         for n in 1..=frames {
             let f = s.render(f64::from(n), &mut buf).unwrap();
@@ -732,7 +747,7 @@ fn mask_preset_from_js_reidentifies_shapes_after_occlusions() {
         }
         let res = records_of(tracker.tracks().unwrap());
         let opts = serde_json::json!({ "similarity": "mask" });
-        let v = evaluate(ts(js(&gt)), ts(js(&res)), frames, Some(ts(js(&opts)))).unwrap();
+        let v = evaluate(ts(js(&gt)), ts(js(&res)), frames, Some(settings(&opts))).unwrap();
         let scores: serde_json::Value = serde_wasm_bindgen::from_value(JsValue::from(v)).unwrap();
         let (idf1, idsw) = (
             scores["idf1"].as_f64().unwrap(),
@@ -760,7 +775,7 @@ fn finish_rejoins_occluded_tracks_and_fills_the_gaps() {
     let (w, h, frames, fps) = (s.width(), s.height(), s.frames(), s.fps());
     let mut buf = FrameBuffer::new(f64::from(w), f64::from(h)).unwrap();
     let opts = serde_json::json!({ "fps": fps });
-    let mut tracker = Tracker::new(None, Some(ts(js(&opts)))).unwrap();
+    let mut tracker = Tracker::new(None, Some(settings(&opts))).unwrap();
     assert!(tracker.offline());
     let mut gt = Vec::new();
     for n in 1..=frames {
@@ -917,7 +932,7 @@ fn a_throwing_progress_callback_is_an_error_and_leaves_the_tracker_usable() {
     // The online tracker forgets a lost track after 3 frames, so the gap breaks it.
     let online = serde_json::json!({ "max_lost": 3 });
     let opts = serde_json::json!({ "fps": 25, "width": 640, "height": 480 });
-    let mut tracker = Tracker::new(Some(ts(js(&online))), Some(ts(js(&opts)))).unwrap();
+    let mut tracker = Tracker::new(Some(settings(&online)), Some(settings(&opts))).unwrap();
     broken_track(&mut tracker);
     assert_eq!(
         ids(&records_of(tracker.tracks().unwrap())).len(),

@@ -9,6 +9,7 @@
 //! size, a position outside [0, 1]) is a JS `Error`, never a trap.
 #![cfg(target_arch = "wasm32")]
 
+use serde::Serialize;
 use shapetrack::io::Rle;
 use shapetrack::wasm::*;
 use tsify::Ts;
@@ -93,6 +94,25 @@ fn bad_follow_input_is_an_error_not_a_trap() {
         }
     }
     let square = RleJs::from(&Rle::encode(64, 48, &bits).unwrap());
+    // Settings are the core's FollowConfig fields; a bad or unknown one is an error naming it.
+    for (bad, field) in [
+        (serde_json::json!({ "max_side": "big" }), "max_side"),
+        (serde_json::json!({ "max_sides": 100 }), "max_sides"),
+    ] {
+        let v = bad
+            .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+            .unwrap();
+        let msg = error_message(
+            Follower::new(&buf, rle_js(&square), Some(v.unchecked_into()))
+                .err()
+                .unwrap(),
+        );
+        assert!(msg.contains(field), "{bad}: {msg}");
+    }
+    let ok = serde_json::json!({ "max_side": 160 })
+        .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+        .unwrap();
+    assert!(Follower::new(&buf, rle_js(&square), Some(ok.unchecked_into())).is_ok());
     let mut f = Follower::new(&buf, rle_js(&square), None).unwrap();
     let small = FrameBuffer::new(32.0, 32.0).unwrap();
     assert!(

@@ -9,7 +9,7 @@ use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use shapetrack::wasm::*;
 use tsify::Ts;
-use wasm_bindgen::JsValue;
+use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::*;
 
 fn ts<T: tsify::Tsify>(v: JsValue) -> Ts<T> {
@@ -78,16 +78,16 @@ fn mutated_settings_never_trap() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(1);
     let tracker = r#"{"preset":"masks","max_lost":30,"motion":{"std_measurement":0.1},"terms":{"iou":{"weight":1}}}"#;
     let offline = r#"{"fps":25,"width":64,"height":48,"relink":{},"fill":{"max_gap_seconds":2}}"#;
-    let background = r#"{"alpha":0.05,"threshold":25,"min_area":20}"#;
+    let background = r#"{"alpha":0.05,"threshold":25,"min_area":20,"connectivity":4,"update":{"selective":{"foreground_alpha":0.01}},"shadow":{}}"#;
     for _ in 0..ITERS {
         if let Some(v) = json(&mutate(&mut rng, tracker)) {
-            let _ = Tracker::new(Some(ts(v)), None);
+            let _ = Tracker::new(Some(v.unchecked_into()), None);
         }
         if let Some(v) = json(&mutate(&mut rng, offline)) {
-            let _ = Tracker::new(None, Some(ts(v)));
+            let _ = Tracker::new(None, Some(v.unchecked_into()));
         }
         if let Some(v) = json(&mutate(&mut rng, background)) {
-            let _ = BackgroundDetector::new(Some(ts(v)));
+            let _ = BackgroundDetector::new(Some(v.unchecked_into()));
         }
     }
     // Still a working module.

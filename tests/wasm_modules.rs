@@ -1,5 +1,8 @@
 //! The structure of `src/wasm` (issue 14): the bindings stay in small modules, one per area,
 //! so no file grows back into a 2,000-line catch-all.
+// A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
+// the wasm suites are the `wasm_*` and `*_wasm` files.
+#![cfg(not(target_arch = "wasm32"))]
 
 use std::path::PathBuf;
 

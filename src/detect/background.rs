@@ -33,7 +33,9 @@ use crate::frame::{Detection, Frame, PixelFormat};
 use serde::{Deserialize, Serialize};
 
 /// How the background model learns (eq. 2).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum UpdatePolicy {
     /// Every pixel at rate `alpha` (the thesis' eq. 2 as written).
     All,
@@ -45,7 +47,9 @@ pub enum UpdatePolicy {
 }
 
 /// Cast-shadow suppression: shadows darken the background without changing its chromaticity.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ShadowConfig {
     /// Smallest `Z/B` brightness ratio still taken as shadow. Default `0.4`.
     pub min_ratio: f32,
@@ -67,7 +71,9 @@ impl Default for ShadowConfig {
 }
 
 /// Settings of the [`BackgroundSubtractor`].
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct BackgroundConfig {
     /// Frames averaged into the initial background (eq. 1, `n`). Default `20`.
     pub init_frames: u32,

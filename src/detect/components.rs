@@ -9,14 +9,37 @@
 use super::DetectError;
 use crate::frame::{BBox, Mask};
 
-/// Which neighbours make pixels connected.
+/// Which neighbours make pixels connected. In settings it is written as the neighbour count,
+/// `4` or `8`, as image-processing libraries name it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "u8", into = "u8")]
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(type = "4 | 8"))]
 pub enum Connectivity {
     /// Left, right, up, down.
     Four,
     /// The four plus the diagonals.
     #[default]
     Eight,
+}
+
+impl TryFrom<u8> for Connectivity {
+    type Error = String;
+    fn try_from(n: u8) -> Result<Self, String> {
+        match n {
+            4 => Ok(Connectivity::Four),
+            8 => Ok(Connectivity::Eight),
+            n => Err(format!("connectivity {n}: expected 4 or 8")),
+        }
+    }
+}
+
+impl From<Connectivity> for u8 {
+    fn from(c: Connectivity) -> u8 {
+        match c {
+            Connectivity::Four => 4,
+            Connectivity::Eight => 8,
+        }
+    }
 }
 
 /// A horizontal run of foreground pixels `[x0, x1)` on row `y`.

@@ -19,7 +19,9 @@ pub const MOTS_IGNORE_CLASS: i32 = 10;
 pub const MOTS_PEDESTRIAN: i32 = 2;
 
 /// How records are filtered before scoring, as TrackEval's dataset classes do.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
 pub enum Preprocessing {
     /// Score every record as given (no filtering, no class checks).
     None,
@@ -61,16 +63,21 @@ impl Preprocessing {
 }
 
 /// Which similarity scores a gt/tracker pair.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Similarity {
-    /// Box IoU (`Record::bbox`), as TrackEval's `_calculate_box_ious`.
+    /// Box IoU (`Record::bbox`), as TrackEval's `_calculate_box_ious`. In settings: `"box"`.
+    #[serde(rename = "box")]
     BoxIou,
-    /// Mask IoU (`Record::mask`), as pycocotools' `iou`.
+    /// Mask IoU (`Record::mask`), as pycocotools' `iou`. In settings: `"mask"`.
+    #[serde(rename = "mask")]
     MaskIou,
 }
 
 /// Evaluation settings.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct EvalConfig {
     /// Filtering before scoring.
     pub preprocessing: Preprocessing,
@@ -92,6 +99,15 @@ impl Default for EvalConfig {
 }
 
 impl EvalConfig {
+    /// Every record scored as given (no preprocessing): records that did not come from a
+    /// benchmark's files, such as a labelling session's, with box IoU at 0.5.
+    pub fn unfiltered() -> EvalConfig {
+        EvalConfig {
+            preprocessing: Preprocessing::None,
+            ..EvalConfig::default()
+        }
+    }
+
     /// TrackEval's settings for a benchmark; `masks` selects MOTS with mask IoU.
     pub fn for_benchmark(benchmark: &str, masks: bool) -> EvalConfig {
         let preprocessing = Preprocessing::for_benchmark(benchmark, masks);

@@ -80,6 +80,7 @@ pub enum ColorError {
 }
 
 /// Settings of the colour analyser. `Default` gives the documented values.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ColorConfig {
     /// Palette size K (default 10, as the thesis).

@@ -108,6 +108,7 @@ pub enum ShapeContextError {
 }
 
 /// Reference direction for the angle bins.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Orientation {
     /// Angles in image coordinates (Belongie's default; not rotation invariant).
@@ -124,6 +125,7 @@ pub enum Orientation {
 }
 
 /// How matched vertex pairs are chosen from the χ² matrix.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum VertexMatching {
     /// Optimal one-to-one assignment (Hungarian / Jonker–Volgenant via `lsap`).
@@ -134,6 +136,7 @@ pub enum VertexMatching {
 }
 
 /// Settings for [`ShapeDescriptor`] and the shape costs. `Default` gives the documented values.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ShapeContextConfig {
     /// Angle bins (default 12).

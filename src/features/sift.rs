@@ -104,8 +104,9 @@ pub enum SiftError {
 
 /// Detector settings. `Default` gives OpenCV's `SIFT::create()` defaults and no size bound;
 /// missing fields deserialise to their defaults.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct SiftConfig {
     /// Layers per octave in which extrema are sought (OpenCV `nOctaveLayers`). Default 3;
     /// accepted 1..=8.
@@ -227,8 +228,9 @@ impl SiftFeatures {
 }
 
 /// Matching settings (missing fields deserialise to their defaults).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MatchConfig {
     /// Lowe's ratio: a match is kept when its distance is below `ratio` × the distance to the
     /// second nearest train descriptor. Default 0.8 (Lowe 2004). Values ≥ 1 disable the test

@@ -82,6 +82,7 @@ pub enum TransformError {
 }
 
 /// Which transform model to fit.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum TransformKind {
     /// Translation only (2 degrees of freedom).

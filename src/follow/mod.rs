@@ -111,8 +111,9 @@ pub enum FollowError {
 
 /// Settings of the follower. `Default` gives the documented values, chosen on synthetic
 /// scenes and DAVIS car-shadow (not on the eight measured DAVIS sequences).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct FollowConfig {
     /// Longest side, in pixels, of the images SIFT and the colour refinement work on; larger
     /// regions are downscaled. Bounds the work per frame. Default 320.

@@ -14,6 +14,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Adaptive coasting settings. Every field has a default, so `{}` is the default.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Coasting {

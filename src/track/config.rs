@@ -13,6 +13,7 @@ use crate::motion::BoxKalmanParams;
 use serde::{Deserialize, Serialize};
 
 /// How C1 fits the transform between two shapes.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum ShapeVariant {
     /// Alg. 4: χ² matching of the contour vertices' log-polar histograms (default).
@@ -25,6 +26,7 @@ pub enum ShapeVariant {
 
 /// The box a track reports for a matched detection (a mask detection's mask is reported
 /// unchanged beside it).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ReportBox {
@@ -44,6 +46,7 @@ pub enum ReportBox {
 /// A term's cost is in `[0, 1]` (0 = surely the same object). A term with weight 0 is not
 /// computed at all. When a term has no data for a pair (no mask, no image), it drops out and
 /// the remaining weights renormalise (thesis eq. 39 generalised).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TermConfig {
@@ -82,6 +85,7 @@ impl TermConfig {
 /// lowered HOTA). Geometry and motion terms are built in; the
 /// appearance terms (shape context, colour, SIFT) are registered by their modules with the
 /// weights given here, and drop out for pairs they have no data for (box mode).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Terms {
@@ -186,7 +190,37 @@ impl Terms {
     }
 }
 
+/// A starting point for [`Config`]: the fields a settings object does not name keep the
+/// preset's values (see [`Config::from_settings`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// [`Config::default`]: tuned on MOTChallenge boxes.
+    #[default]
+    Default,
+    /// [`Config::masks`]: instance masks with frames (appearance in ambiguous clusters,
+    /// re-identification by colour and SIFT, amodal completion, fragment merging, coasting).
+    Masks,
+}
+
+impl Preset {
+    /// The preset's complete config.
+    pub fn config(self) -> Config {
+        match self {
+            Preset::Default => Config::default(),
+            Preset::Masks => Config::masks(),
+        }
+    }
+}
+
 /// Everything the online tracker can be told. Defaults are documented on each field.
+#[cfg_attr(
+    target_arch = "wasm32",
+    derive(tsify::Tsify),
+    tsify(rename = "TrackConfig", missing_as_null)
+)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Config {
@@ -617,83 +651,79 @@ impl Config {
 
     /// Reads a config from JSON; missing fields take their defaults, unknown fields are errors.
     pub fn from_json(text: &str) -> Result<Config, serde_json::Error> {
-        let v: serde_json::Value = serde_json::from_str(text)?;
-        check_shape(&v, &serde_json::to_value(Config::default())?, "config")?;
-        serde_json::from_value(v)
+        Config::default().overlay_json(text)
     }
 
     /// This config with the fields a JSON object names replaced, nested objects merged field
     /// by field (`{"terms": {"iou": {"weight": 2}}}` changes one weight and keeps the rest of
-    /// `self`, not of the defaults). Unknown fields are errors, as in [`Config::from_json`].
-    /// This is how a partial config applies over a preset such as [`Config::masks`].
+    /// `self`, not of the defaults). Unknown fields are errors, and every error names its
+    /// field (see [`crate::settings::overlay`]). This is how a partial config applies over a
+    /// preset such as [`Config::masks`].
     pub fn overlay(&self, patch: &serde_json::Value) -> Result<Config, serde_json::Error> {
-        fn merge(a: &mut serde_json::Value, b: &serde_json::Value) {
-            match (a, b) {
-                (serde_json::Value::Object(a), serde_json::Value::Object(b)) => {
-                    for (k, v) in b {
-                        match a.get_mut(k) {
-                            Some(slot) => merge(slot, v),
-                            None => {
-                                a.insert(k.clone(), v.clone());
-                            }
-                        }
-                    }
-                }
-                (a, b) => *a = b.clone(),
-            }
-        }
-        let mut value = serde_json::to_value(self)?;
-        check_shape(patch, &value, "config")?;
-        merge(&mut value, patch);
-        serde_json::from_value(value)
+        crate::settings::overlay(self, patch)
     }
 
     /// [`Config::overlay`] from JSON text.
     pub fn overlay_json(&self, text: &str) -> Result<Config, serde_json::Error> {
         self.overlay(&serde_json::from_str(text)?)
     }
-}
 
-/// Checks that `v` has objects wherever `template` (a serialised config) has them: serde
-/// would otherwise read a JSON array into a struct field by field (`[1, 2, 3]` silently
-/// setting the first three fields). `path` names the place in errors. Where the template
-/// holds `null` (an optional section that is off) anything goes; the types are serde's to
-/// check.
-pub fn check_shape(
-    v: &serde_json::Value,
-    template: &serde_json::Value,
-    path: &str,
-) -> Result<(), serde_json::Error> {
-    use serde::de::Error as _;
-    use serde_json::Value;
-    match (template, v) {
-        (Value::Object(t), Value::Object(o)) => {
-            for (k, x) in o {
-                if let Some(tk) = t.get(k) {
-                    check_shape(x, tk, &format!("{path}.{k}"))?;
-                }
-            }
-            Ok(())
-        }
-        (Value::Object(_), Value::Null) if path != "config" => Ok(()),
-        (Value::Object(_), other) => Err(serde_json::Error::custom(format!(
-            "{path} must be a JSON object, not {}",
-            match other {
-                Value::Array(_) => "an array",
-                Value::String(_) => "a string",
-                Value::Number(_) => "a number",
-                Value::Bool(_) => "a boolean",
-                Value::Null => "null",
-                Value::Object(_) => "an object",
-            }
-        ))),
-        _ => Ok(()),
+    /// A config from a settings object as people write it: an optional `"preset"`
+    /// (`"default"` or `"masks"`; `preset` when absent) and any fields of [`Config`] over it.
+    /// The CLI's `--config` files and the browser's settings objects both come through here.
+    pub fn from_settings(
+        preset: Preset,
+        v: &serde_json::Value,
+    ) -> Result<Config, serde_json::Error> {
+        use serde::de::Error as _;
+        let serde_json::Value::Object(map) = v else {
+            return Err(serde_json::Error::custom("settings must be a JSON object"));
+        };
+        let mut patch = map.clone();
+        let preset = match patch.remove("preset") {
+            None => preset,
+            Some(p) => serde_json::from_value(p)
+                .map_err(|e| serde_json::Error::custom(format!("preset: {e}")))?,
+        };
+        preset.config().overlay(&serde_json::Value::Object(patch))
     }
 }
+
+pub use crate::settings::check_shape;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn settings_apply_over_a_preset_field_by_field() {
+        let v = serde_json::json!({
+            "preset": "masks", "high_score": 0.25, "reid_terms": { "colour": { "gate": 0.4 } }
+        });
+        let cfg = Config::from_settings(Preset::Default, &v).unwrap();
+        let masks = Config::masks();
+        assert_eq!(cfg.high_score, 0.25);
+        assert_eq!(cfg.reid_terms.colour.gate, Some(0.4));
+        // Nested fields not named keep the preset's values, not the defaults'.
+        assert_eq!(cfg.reid_terms.colour.weight, masks.reid_terms.colour.weight);
+        assert_eq!(cfg.max_lost, masks.max_lost);
+        assert_ne!(cfg.max_lost, Config::default().max_lost);
+        // Without "preset" the caller's preset is the base; `{}` is that preset exactly.
+        let empty = serde_json::json!({});
+        assert_eq!(Config::from_settings(Preset::Masks, &empty).unwrap(), masks);
+        assert_eq!(
+            Config::from_settings(Preset::Default, &empty).unwrap(),
+            Config::default()
+        );
+        // Every field of both presets, named in full, reads back as the preset.
+        for p in [Preset::Default, Preset::Masks] {
+            let full = serde_json::to_value(p.config()).unwrap();
+            assert_eq!(
+                Config::from_settings(Preset::Default, &full).unwrap(),
+                p.config()
+            );
+        }
+    }
 
     #[test]
     fn the_main_gate_scales_with_the_frame_interval() {

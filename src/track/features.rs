@@ -101,6 +101,7 @@ impl FeatureExtractor for BoxFeatures {
 }
 
 /// How a mask's convex shell is computed (module docs).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ShellMode {
     /// The exact convex hull of the mask's pixel squares (default).
@@ -140,6 +141,7 @@ impl Needs {
 }
 
 /// Settings of the mask features and of when the tracker computes appearance.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct AppearanceConfig {

@@ -54,7 +54,7 @@ mod timing;
 pub use appearance::{ColourCost, ColourMode, ShapeContextCost, SiftCost, TrackSide};
 pub use associate::{Stage, StageCosts, StageDetections, StageTracks};
 pub use coasting::Coasting;
-pub use config::{Config, ReportBox, ShapeVariant, TermConfig, Terms};
+pub use config::{Config, Preset, ReportBox, ShapeVariant, TermConfig, Terms};
 pub use cost::{
     Candidate, CentreDistanceCost, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,
     MahalanobisCost, MaskIouCost, PairCost, SizeCost, WeightedTerm,

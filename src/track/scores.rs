@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 /// How score thresholds adapt to the sequence (see the module docs). Every field has a
 /// default, so `{}` is the default adaptation.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ScoreAdaptation {

@@ -1,9 +1,7 @@
 //! Detections: lists handed in by detectors written in JS, and the background detector.
 
 use super::*;
-use crate::detect::{
-    BackgroundConfig, BackgroundSubtractor, Connectivity, Detector, ShadowConfig, UpdatePolicy,
-};
+use crate::detect::{BackgroundSubtractor, Detector};
 use crate::frame::{BBox, Detection, Mask};
 use serde::{Deserialize, Serialize};
 use tsify::{Ts, Tsify};
@@ -159,11 +157,8 @@ impl BackgroundDetector {
     /// A detector with the core's defaults, or the settings given (`BackgroundConfig`'s
     /// fields; missing ones keep their defaults).
     #[wasm_bindgen(constructor)]
-    pub fn new(config: Option<Ts<BackgroundOptions>>) -> Result<BackgroundDetector, JsValue> {
-        let cfg = match config {
-            Some(c) => settings(c)?.into_core()?,
-            None => BackgroundConfig::default(),
-        };
+    pub fn new(config: Option<BackgroundSettings>) -> Result<BackgroundDetector, JsValue> {
+        let cfg = settings::background_config(config.as_ref())?;
         Ok(BackgroundDetector {
             inner: BackgroundSubtractor::new(cfg).map_err(js_error)?,
         })
@@ -192,93 +187,5 @@ impl BackgroundDetector {
     #[wasm_bindgen(getter, js_name = warmupFrames)]
     pub fn warmup_frames(&self) -> u32 {
         self.inner.warmup().1
-    }
-}
-
-/// Settings of the background detector; every field is optional and defaults to the core's
-/// `BackgroundConfig::default()`.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
-#[serde(default, deny_unknown_fields)]
-pub struct BackgroundOptions {
-    /// Frames averaged into the initial background.
-    #[tsify(optional)]
-    pub init_frames: Option<u32>,
-    /// Learning rate of background pixels, in (0, 1].
-    #[tsify(optional)]
-    pub alpha: Option<f32>,
-    /// Learning rate of foreground pixels (selective update); 0 = only by absorption.
-    #[tsify(optional)]
-    pub foreground_alpha: Option<f32>,
-    /// Learn every pixel at `alpha` (the thesis' eq. 2 as written) instead of selectively.
-    #[tsify(optional)]
-    pub update_all: Option<bool>,
-    /// Grey-level difference above which a pixel is foreground.
-    #[tsify(optional)]
-    pub threshold: Option<f32>,
-    /// Frames after which a still foreground pixel is absorbed into the background (0 = never).
-    #[tsify(optional)]
-    pub absorb_frames: Option<u32>,
-    /// Suppress cast shadows (with the core's default shadow settings).
-    #[tsify(optional)]
-    pub shadows: Option<bool>,
-    /// Radius of the opening (0 = none).
-    #[tsify(optional)]
-    pub open_radius: Option<u32>,
-    /// Radius of the closing (0 = none).
-    #[tsify(optional)]
-    pub close_radius: Option<u32>,
-    /// Blobs with fewer pixels are dropped.
-    #[tsify(optional)]
-    pub min_area: Option<u32>,
-    /// Pixel connectivity of blobs: 4 or 8.
-    #[tsify(optional, type = "4 | 8")]
-    pub connectivity: Option<u8>,
-}
-
-impl BackgroundOptions {
-    fn into_core(self) -> Result<BackgroundConfig, JsValue> {
-        let mut c = BackgroundConfig::default();
-        if let Some(v) = self.init_frames {
-            c.init_frames = v;
-        }
-        if let Some(v) = self.alpha {
-            c.alpha = v;
-        }
-        match (self.update_all, self.foreground_alpha) {
-            (Some(true), _) => c.update = UpdatePolicy::All,
-            (_, Some(foreground_alpha)) => c.update = UpdatePolicy::Selective { foreground_alpha },
-            _ => {}
-        }
-        if let Some(v) = self.threshold {
-            c.threshold = v;
-        }
-        if let Some(v) = self.absorb_frames {
-            c.absorb_frames = v;
-        }
-        if let Some(v) = self.shadows {
-            c.shadow = v.then(ShadowConfig::default);
-        }
-        if let Some(v) = self.open_radius {
-            c.open_radius = v;
-        }
-        if let Some(v) = self.close_radius {
-            c.close_radius = v;
-        }
-        if let Some(v) = self.min_area {
-            c.min_area = u64::from(v);
-        }
-        match self.connectivity {
-            None => {}
-            Some(4) => c.connectivity = Connectivity::Four,
-            Some(8) => c.connectivity = Connectivity::Eight,
-            Some(n) => {
-                return Err(js_error(BindingError::Option {
-                    name: "connectivity",
-                    message: format!("{n} (expected 4 or 8)"),
-                }))
-            }
-        }
-        // The core checks ranges when the detector is built.
-        Ok(c)
     }
 }

@@ -1,63 +1,10 @@
 //! Evaluation: the core's MOT metrics over records from JS.
 
 use super::*;
-use crate::eval::{self, EvalConfig, Preprocessing, SequenceInput, Similarity, Summary};
-use serde::{Deserialize, Serialize};
+use crate::eval::{self, SequenceInput, Summary};
+use serde::Serialize;
 use tsify::{Ts, Tsify};
 use wasm_bindgen::prelude::*;
-
-/// How to score: which similarity, threshold and preprocessing (defaults: box IoU, 0.5, none).
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
-#[serde(default, deny_unknown_fields)]
-pub struct EvalOptions {
-    /// Pair similarity: box IoU or mask IoU.
-    #[tsify(optional, type = "\"box\" | \"mask\"")]
-    pub similarity: Option<String>,
-    /// Similarity a CLEAR or Identity match needs.
-    #[tsify(optional)]
-    pub threshold: Option<f64>,
-    /// TrackEval's preprocessing of a benchmark: "mot15", "mot17", "mot20", "mots"; absent:
-    /// score every record as given.
-    #[tsify(optional, type = "\"mot15\" | \"mot17\" | \"mot20\" | \"mots\"")]
-    pub benchmark: Option<String>,
-}
-
-impl EvalOptions {
-    fn to_core(&self) -> Result<EvalConfig, JsValue> {
-        let masks = match self.similarity.as_deref() {
-            None | Some("box") => false,
-            Some("mask") => true,
-            Some(other) => {
-                return Err(js_error(BindingError::Option {
-                    name: "similarity",
-                    message: format!("{other:?} (expected \"box\" or \"mask\")"),
-                }))
-            }
-        };
-        let mut cfg = match self.benchmark.as_deref() {
-            None => EvalConfig {
-                preprocessing: Preprocessing::None,
-                ..EvalConfig::default()
-            },
-            Some(b @ ("mot15" | "mot17" | "mot20" | "mots")) => EvalConfig::for_benchmark(b, masks),
-            Some(other) => {
-                return Err(js_error(BindingError::Option {
-                    name: "benchmark",
-                    message: format!("{other:?} (expected mot15, mot17, mot20 or mots)"),
-                }))
-            }
-        };
-        cfg.similarity = if masks {
-            Similarity::MaskIou
-        } else {
-            Similarity::BoxIou
-        };
-        if let Some(t) = self.threshold {
-            cfg.threshold = t;
-        }
-        Ok(cfg)
-    }
-}
 
 /// The headline MOT metrics, as TrackEval prints them (percentages 0–100, counts).
 #[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
@@ -133,12 +80,9 @@ pub fn evaluate(
     gt: Ts<Records>,
     results: Ts<Records>,
     frames: u32,
-    options: Option<Ts<EvalOptions>>,
+    options: Option<EvalSettings>,
 ) -> Result<Ts<Scores>, JsValue> {
-    let cfg = match options {
-        Some(o) => settings(o)?.to_core()?,
-        None => EvalOptions::default().to_core()?,
-    };
+    let cfg = settings::eval_config(options.as_ref())?;
     let gt = to_core_records(rust(gt)?)?;
     let res = to_core_records(rust(results)?)?;
     let input = [SequenceInput::new("sequence", frames, gt, res)];

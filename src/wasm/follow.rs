@@ -3,48 +3,11 @@
 //! (`interpolateMasks`). Masks cross the boundary as compressed RLE of the whole frame.
 
 use super::*;
-use crate::follow::{interpolate_masks, FollowConfig, Follower as CoreFollower};
+use crate::follow::{interpolate_masks, Follower as CoreFollower};
 use crate::io::Rle;
 use serde::{Deserialize, Serialize};
 use tsify::{Ts, Tsify};
 use wasm_bindgen::prelude::*;
-
-/// Settings of the follower; every field is optional and keeps the core's default
-/// (`follow::FollowConfig`).
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, Tsify)]
-#[serde(default, deny_unknown_fields)]
-pub struct FollowOptions {
-    /// Longest side, in pixels, of the images the follower works on (bounds the work per
-    /// frame).
-    #[tsify(optional)]
-    pub max_side: Option<u32>,
-    /// Search margin around the predicted box, as a fraction of its longer side.
-    #[tsify(optional)]
-    pub search_margin: Option<f64>,
-    /// Below this confidence a frame counts as lost.
-    #[tsify(optional)]
-    pub lost_confidence: Option<f64>,
-    /// Lost frames in a row after which the follower stops.
-    #[tsify(optional)]
-    pub max_lost: Option<u32>,
-    /// A detection whose mask IoU with the followed mask reaches this replaces it.
-    #[tsify(optional)]
-    pub detection_iou: Option<f64>,
-}
-
-impl FollowOptions {
-    fn into_core(self) -> FollowConfig {
-        let d = FollowConfig::default();
-        FollowConfig {
-            max_side: self.max_side.unwrap_or(d.max_side),
-            search_margin: self.search_margin.unwrap_or(d.search_margin),
-            lost_confidence: self.lost_confidence.unwrap_or(d.lost_confidence),
-            max_lost: self.max_lost.map_or(d.max_lost, |v| v as usize),
-            detection_iou: self.detection_iou.unwrap_or(d.detection_iou),
-            ..d
-        }
-    }
-}
 
 /// The follower's result for one frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Tsify)]
@@ -81,7 +44,7 @@ impl Follower {
     pub fn new(
         buf: &FrameBuffer,
         mask: Ts<RleJs>,
-        options: Option<Ts<FollowOptions>>,
+        options: Option<FollowSettings>,
     ) -> Result<Follower, JsValue> {
         let rle = rust(mask)?.to_rle()?;
         let (width, height) = (buf.width(), buf.height());
@@ -91,10 +54,7 @@ impl Follower {
                 rle.width, rle.height
             ))));
         }
-        let cfg = match options {
-            Some(o) => settings(o)?.into_core(),
-            None => FollowConfig::default(),
-        };
+        let cfg = settings::follow_config(options.as_ref())?;
         let frame = buf.frame()?;
         let inner = CoreFollower::new(&frame, &rle.to_mask(), cfg).map_err(js_error)?;
         Ok(Follower {

@@ -14,8 +14,8 @@
 //! One module per area, each small (a test keeps every file under 500 lines); everything
 //! public is re-exported here, so the JS API and `shapetrack::wasm::*` are one flat namespace:
 //! `frame` (frame buffers, boxes, masks), `annotations` (file formats), `detect` (detections,
-//! background detector), `options` (tracker settings), `offline` (offline-pass settings,
-//! progress, result), `tracker`, `synth` (the demo scene), `eval` (metrics), `follow` (following one given shape, keyframe interpolation), and `error` (how
+//! background detector), `settings` (settings objects: partial JSON over the core's config
+//! types, typed from them), `offline` (the offline pass' progress and result), `tracker`, `synth` (the demo scene), `eval` (metrics), `follow` (following one given shape, keyframe interpolation), and `error` (how
 //! failures become JS `Error`s; not exported).
 
 mod annotations;
@@ -25,7 +25,7 @@ mod eval;
 mod follow;
 mod frame;
 mod offline;
-mod options;
+mod settings;
 mod synth;
 mod tracker;
 
@@ -35,7 +35,9 @@ pub use eval::*;
 pub use follow::*;
 pub use frame::*;
 pub use offline::*;
-pub use options::*;
+pub use settings::{
+    BackgroundSettings, EvalSettings, FollowSettings, OfflineSettings, TrackerSettings,
+};
 pub use synth::*;
 pub use tracker::*;
 // The helpers every binding shares (not part of the JS API).

@@ -6,7 +6,7 @@ use crate::io::{Record, Rle};
 use crate::track::offline::{
     OfflineConfig, OfflineError, OfflineTracker, Progress, RleHistory, RleShape,
 };
-use crate::track::{Config as TrackConfig, Tracker as CoreTracker};
+use crate::track::Tracker as CoreTracker;
 use serde::Serialize;
 use tsify::{Ts, Tsify};
 use wasm_bindgen::prelude::*;
@@ -96,33 +96,14 @@ impl Tracker {
     /// `offline` options it can run the offline pass at the end (`finish`).
     #[wasm_bindgen(constructor)]
     pub fn new(
-        config: Option<Ts<TrackerConfig>>,
-        offline: Option<Ts<OfflineOptions>>,
+        config: Option<TrackerSettings>,
+        offline: Option<OfflineSettings>,
     ) -> Result<Tracker, JsValue> {
-        let cfg = match config {
-            Some(c) => settings(c)?.to_core()?,
-            None => TrackConfig::default(),
-        };
+        let cfg = settings::track_config(config.as_ref())?;
         let (config, fps, size) = match offline {
             Some(o) => {
-                let o = settings(o)?;
-                if !(o.fps.is_finite() && o.fps > 0.0) {
-                    return Err(js_error(BindingError::Option {
-                        name: "fps",
-                        message: format!("{} (must be a finite number > 0)", o.fps),
-                    }));
-                }
-                let size = match (o.width, o.height) {
-                    (Some(w), Some(h)) => Some((w, h)),
-                    (None, None) => None,
-                    _ => {
-                        return Err(js_error(BindingError::Option {
-                            name: "width/height",
-                            message: "give both or neither".to_string(),
-                        }))
-                    }
-                };
-                (Some(o.to_core(cfg.clone())?), o.fps, size)
+                let o = settings::offline_config(&o, cfg.clone())?;
+                (Some(o.config), o.fps, o.size)
             }
             None => (None, 1.0, None),
         };

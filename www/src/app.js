@@ -67,7 +67,7 @@ export class App {
     /**
      * Tracker settings over the detector's own (`?preset=default` starts from the core's box-mode
      * defaults instead of the mask preset the mask detectors use); null: the detector's.
-     * @type {import('../pkg/shapetrack.js').TrackerConfig | null}
+     * @type {import('../pkg/shapetrack.js').TrackerSettings | null}
      */
     this.tracker = null;
     /** @type {{ a: number | null, b: number | null }} */

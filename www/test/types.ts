@@ -19,7 +19,9 @@ import init, {
   type Format,
   type JoinJs,
   type MaskBitmap,
-  type OfflineOptions,
+  type OfflineSettings,
+  type TrackConfig,
+  type TrackerSettings,
   type OfflineOutput,
   type OfflineProgress,
   type RecordJs,
@@ -82,13 +84,23 @@ export async function usage(): Promise<string> {
   const hota: number = scores.hota;
   // @ts-expect-error: unknown tracker options are type errors (and runtime errors)
   new Tracker({ max_lots: 3 });
+  // The settings types are derived from the core's config (tsify), every field optional.
+  const settings: TrackerSettings = { preset: 'masks', appearance: { lazy: true }, score_adaptation: null };
+  const field: keyof TrackConfig = 'max_lost';
+  // @ts-expect-error: presets are a closed set
+  new Tracker({ preset: 'mask' });
+  // @ts-expect-error: a nested field of the core's config keeps its type
+  new Tracker({ terms: { iou: { weight: 'heavy' } } });
+  // @ts-expect-error: similarity is box or mask
+  evaluate(sf.groundTruth(), tracker.tracks(), 2, { similarity: 'area' });
+  new Tracker(settings);
   // @ts-expect-error: scene presets are a closed set
   new SynthScene('forest');
   // @ts-expect-error: connectivity is 4 or 8
   new BackgroundDetector({ connectivity: 6 });
 
   // The offline pass: a tracker built with offline options, then finish() with progress.
-  const opts: OfflineOptions = { fps: 25, relink: { solver: 'global', max_gap_seconds: 4 }, fill: { max_gap: 8, trajectory: 'linear' } };
+  const opts: OfflineSettings = { fps: 25, relink: { solver: 'global', max_gap_seconds: 4 }, fill: { max_gap: 8, trajectory: 'linear' } };
   const offline = new Tracker({ max_lost: 30 }, opts);
   offline.update(1, frameBuf, dets);
   const canFinish: boolean = offline.offline && !offline.finished;
@@ -114,5 +126,5 @@ export async function usage(): Promise<string> {
   const phase: OfflineProgress['phase'] = 'tracking';
 
   buf.free();
-  return `${n} ${state} ${hota} ${canFinish} ${phases} ${master} ${filled} ${phase} ` + `${version()} ${size} ${width} ${id} ${mask?.counts} ${text} ${data.length} ${wrong}`;
+  return `${field} ${n} ${state} ${hota} ${canFinish} ${phases} ${master} ${filled} ${phase} ` + `${version()} ${size} ${width} ${id} ${mask?.counts} ${text} ${data.length} ${wrong}`;
 }

@@ -303,23 +303,6 @@ fn row(r: &MotResults) -> Row {
     Row::from(&r.summary().combined)
 }
 
-/// `patch` merged into `base`, objects field by field (as `Config::overlay`).
-fn merge(base: &mut serde_json::Value, patch: &serde_json::Value) {
-    match (base, patch) {
-        (serde_json::Value::Object(a), serde_json::Value::Object(b)) => {
-            for (k, v) in b {
-                match a.get_mut(k) {
-                    Some(slot) => merge(slot, v),
-                    None => {
-                        a.insert(k.clone(), v.clone());
-                    }
-                }
-            }
-        }
-        (a, b) => *a = b.clone(),
-    }
-}
-
 /// One config line of `grid eval --configs`.
 #[derive(serde::Deserialize)]
 struct ConfigLine {
@@ -360,7 +343,7 @@ fn eval_many(
                 if let Some(o) = &c.offline {
                     let online = t.config.online.clone();
                     let mut v = serde_json::to_value(&t.config).map_err(bad)?;
-                    merge(&mut v, o);
+                    shapetrack::settings::merge(&mut v, o);
                     t.config = serde_json::from_value(v).map_err(bad)?;
                     t.config.online = online;
                 }

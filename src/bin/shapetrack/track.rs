@@ -19,20 +19,10 @@ use shapetrack::io::motchallenge::{
 use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, write_scalabel, Categories};
 use shapetrack::io::{image_files, read_text, write_text, AtomicFile, IoError, Record};
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase};
-use shapetrack::track::{detections_by_frame, to_records, Config, Tracker};
+use shapetrack::track::{detections_by_frame, to_records, Config, Preset, Tracker};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-
-/// Tracker settings presets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Preset {
-    /// `Config::default()`: tuned on MOTChallenge boxes.
-    Default,
-    /// `Config::masks()`: instance masks with frames (appearance, re-identification by colour
-    /// and SIFT, amodal completion, fragment merging, coasting).
-    Masks,
-}
 
 /// Output file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -86,7 +76,8 @@ pub struct Args {
     /// Output format (default: from the extension: `.json` COCO-video, `.xml` CVAT, else MOT).
     #[arg(long, value_enum)]
     pub format: Option<Format>,
-    /// Tracker configuration (JSON; missing fields take the preset's values).
+    /// Tracker configuration (JSON; missing fields take the preset's values, and a
+    /// `"preset"` field in it replaces `--preset`).
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Settings preset the configuration starts from (default: `masks` for MOTS masks,
@@ -488,15 +479,14 @@ pub fn run(args: Args) -> crate::CliResult {
     let preset = args
         .preset
         .unwrap_or(if mots { Preset::Masks } else { Preset::Default });
-    let base = match preset {
-        Preset::Masks => Config::masks(),
-        Preset::Default => Config::default(),
-    };
+    // A --config file may name its own "preset", which then replaces this one.
     let online_config = match &args.config {
-        Some(p) => base
-            .overlay_json(&read_text(p)?)
-            .map_err(|e| format!("{}: {e}", p.display()))?,
-        None => base,
+        Some(p) => {
+            let bad = |e: serde_json::Error| format!("{}: {e}", p.display());
+            let value: serde_json::Value = serde_json::from_str(&read_text(p)?).map_err(bad)?;
+            Config::from_settings(preset, &value).map_err(bad)?
+        }
+        None => preset.config(),
     };
     let mut offline_config = OfflineConfig {
         online: online_config.clone(),

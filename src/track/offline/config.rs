@@ -12,6 +12,7 @@ use crate::track::Config;
 use serde::{Deserialize, Serialize};
 
 /// How the joins are chosen among all (slave, master) candidate pairs.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum JoinSolver {
@@ -25,6 +26,7 @@ pub enum JoinSolver {
 }
 
 /// Which trajectory filled-in shapes follow between the two ends of a gap.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Trajectory {
@@ -38,6 +40,7 @@ pub enum Trajectory {
 }
 
 /// The Kalman trajectory re-linker (thesis ch. 5, DESIGN §3).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RelinkConfig {
@@ -99,6 +102,7 @@ impl Default for RelinkConfig {
 }
 
 /// Gap filling: shapes invented between two observed shapes of one identity.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FillConfig {
@@ -145,6 +149,11 @@ impl Default for FillConfig {
 
 /// Appearance snapshots: a grey crop of each track's first and last appearance, kept during
 /// the online pass so the video need not stay in memory, and matched with SIFT at the end.
+#[cfg_attr(
+    target_arch = "wasm32",
+    derive(tsify::Tsify),
+    tsify(rename = "SnapshotConfig", missing_as_null)
+)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct AppearanceConfig {
@@ -174,16 +183,20 @@ impl Default for AppearanceConfig {
 
 /// Everything the offline pass can be told: the online tracker's config plus the offline
 /// stages'. `{}` is a valid JSON config (all defaults).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OfflineConfig {
     /// The online pass.
+    // tsify names a field's type by its Rust name; these two are renamed in TypeScript.
+    #[cfg_attr(target_arch = "wasm32", tsify(type = "TrackConfig"))]
     pub online: Config,
     /// The re-linker.
     pub relink: RelinkConfig,
     /// Gap filling.
     pub fill: FillConfig,
     /// Appearance snapshots.
+    #[cfg_attr(target_arch = "wasm32", tsify(type = "SnapshotConfig"))]
     pub appearance: AppearanceConfig,
     /// Identities with fewer observed (not filled-in) shapes than this many seconds' worth of
     /// frames after joining are dropped: a short track nothing re-joined is most likely a
@@ -278,12 +291,10 @@ impl OfflineConfig {
         Self::from_value(serde_json::from_str(text)?)
     }
 
-    /// [`OfflineConfig::from_json`] from a parsed value; arrays where sections belong are
-    /// errors (see [`crate::track::config::check_shape`]).
+    /// [`OfflineConfig::from_json`] from a parsed value: a partial config over the defaults
+    /// (see [`crate::settings::overlay`]; errors name the field).
     pub fn from_value(v: serde_json::Value) -> Result<OfflineConfig, serde_json::Error> {
-        let template = serde_json::to_value(OfflineConfig::default())?;
-        crate::track::config::check_shape(&v, &template, "config")?;
-        serde_json::from_value(v)
+        crate::settings::overlay(&OfflineConfig::default(), &v)
     }
 }
 

@@ -37,7 +37,7 @@ import { ssdDetector } from './detectors/ssd.js';
  *   detect: (frame: DetectorFrame) => Detections | DetectionLists | Promise<Detections | DetectionLists>,
  *   dispose?: () => void,
  *   warmup?: () => { seen: number, total: number } | null,
- *   tracker?: import('../../pkg/shapetrack.js').TrackerConfig,
+ *   tracker?: import('../../pkg/shapetrack.js').TrackerSettings,
  *   classes?: string[],
  * }} Detector  `tracker` holds the tracker settings this detector's output needs (its scores
  *   may not be confidences); the page's own settings override them. `classes` names the class
@@ -101,7 +101,7 @@ function backgroundSubtractor(options) {
     // MOTS only the mask), and a smoothed box beside the mask would disagree with it.
     tracker: { preset: 'masks', high_score: 0.25, new_track_score: 0.5, camera_motion: false, report_box: 'detection' },
     init({ core }) {
-      bg = new core.BackgroundDetector(/** @type {import('../../pkg/shapetrack.js').BackgroundOptions} */ (options));
+      bg = new core.BackgroundDetector(/** @type {import('../../pkg/shapetrack.js').BackgroundSettings} */ (options));
     },
     detect(frame) {
       if (!bg) throw new Error('background detector used before init');

@@ -7,7 +7,7 @@
 
 /**
  * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
- * @typedef {import('../../pkg/shapetrack.js').TrackerConfig} TrackerConfig
+ * @typedef {import('../../pkg/shapetrack.js').TrackerSettings} TrackerSettings
  * @typedef {import('../../pkg/shapetrack.js').ScenePreset} ScenePreset
  *
  * @typedef {import('../../pkg/shapetrack.js').OfflineProgress} OfflineProgress
@@ -18,7 +18,7 @@
  * @typedef {{
  *   source: SourceSpec,
  *   detector: string,
- *   tracker?: TrackerConfig,
+ *   tracker?: TrackerSettings,
  *   detectorOptions?: Record<string, unknown>,
  *   offline?: boolean,
  * }} OpenRequest  `offline`: keep what the offline pass needs (a video or image sequence

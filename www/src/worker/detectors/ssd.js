@@ -24,7 +24,7 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   minScore?: number,
  *   minFill?: number,
  *   perClassNms?: boolean,
- *   background?: import('../../../pkg/shapetrack.js').BackgroundOptions,
+ *   background?: import('../../../pkg/shapetrack.js').BackgroundSettings,
  * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
  *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the box
  *   is filled (default 0.2); `perClassNms`: suppress overlaps only within a class
