@@ -398,7 +398,8 @@ fn solve_with_unmatched_cost(
         .collect())
 }
 
-#[cfg(test)]
+// proptest does not build for wasm32 (`wasm-pack test` builds unit tests there too).
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use proptest::prelude::*;

@@ -149,7 +149,8 @@ pub fn estimate_regions(track_shells: &[BBox], det_shells: &[BBox]) -> Regions {
     }
 }
 
-#[cfg(test)]
+// proptest does not build for wasm32 (`wasm-pack test` builds unit tests there too).
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use proptest::prelude::*;

@@ -10,6 +10,9 @@ mod detect_eval;
 mod eval;
 mod eval_vot;
 mod follow;
+// The grid needs the native-only `shapetrack::grid` (and rayon). The CLI is a native tool,
+// but `wasm-pack test` builds every target for wasm32, so the rest compiles there too.
+#[cfg(not(target_arch = "wasm32"))]
 mod grid;
 mod synth;
 mod track;
@@ -54,9 +57,16 @@ enum Cmd {
     /// Measure speed (frames per second) of the tracker and its stages.
     Bench(bench::Args),
     /// The robustness grid: datasets × detector models × trackers.
+    #[cfg(not(target_arch = "wasm32"))]
     Grid(grid::Args),
 }
 
+#[cfg(target_arch = "wasm32")]
+fn main() -> ExitCode {
+    run()
+}
+
+#[cfg(not(target_arch = "wasm32"))]
 fn main() -> ExitCode {
     // One thread, as in the browser (ARCHITECTURE.md: single-threaded per worker), and the
     // command runs *on* that pool's thread: linfa's k-means calls rayon for every small
@@ -85,6 +95,7 @@ fn run() -> ExitCode {
         Cmd::Detect(a) => detect::run(a),
         Cmd::DetectEval(a) => detect_eval::run(a),
         Cmd::Bench(a) => bench::run(a),
+        #[cfg(not(target_arch = "wasm32"))]
         Cmd::Grid(a) => grid::run(a),
     };
     match res {
