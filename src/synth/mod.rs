@@ -439,6 +439,35 @@ impl ScriptedShape {
     }
 }
 
+/// The named scenes (the CLI's `synth --preset`, the browser's `new SynthScene(name)`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum ScenePreset {
+    /// [`SynthConfig::default`]: 640×480, 300 frames, 10 shapes leaving and entering, one
+    /// occluding bar.
+    #[default]
+    Default,
+    /// [`SynthConfig::occlusion_scene`]: 8 shapes crossing and bouncing behind two bars
+    /// (~10-frame occlusions), 640×480.
+    Occlusion,
+    /// [`SynthConfig::demo`]: the 1280×720 browser demo, 600 frames, 12 shapes entering and
+    /// leaving, two occluding bars.
+    Demo,
+}
+
+impl ScenePreset {
+    /// The scene's config; `seed` seeds the scenes that take one (the occlusion scene).
+    pub fn config(self, seed: u64) -> SynthConfig {
+        match self {
+            ScenePreset::Default => SynthConfig::default(),
+            ScenePreset::Occlusion => SynthConfig::occlusion_scene(seed),
+            ScenePreset::Demo => SynthConfig::demo(),
+        }
+    }
+}
+
 /// Everything that defines a synthetic sequence. `Default` gives a 640×480, 25 fps, 300-frame
 /// sequence of 10 shapes with one occluding bar and the default detection noise.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -3,22 +3,9 @@
 use super::*;
 use crate::frame::Detection;
 use crate::io::Record;
-use crate::synth::{Scene, SynthConfig};
-use serde::{Deserialize, Serialize};
-use tsify::{Ts, Tsify};
+use crate::synth::{Scene, ScenePreset};
+use tsify::Ts;
 use wasm_bindgen::prelude::*;
-
-/// The synthetic scenes the app offers, by name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Tsify)]
-#[serde(rename_all = "kebab-case")]
-pub enum ScenePreset {
-    /// 1280×720, 600 frames, 12 shapes entering and leaving, two occluding bars.
-    Demo,
-    /// The core's default scene: 640×480, 300 frames, 10 shapes.
-    Default,
-    /// Crossings and occlusions: 8 shapes bouncing behind two bars, 640×480.
-    Occlusion,
-}
 
 /// Frames between two saved scene states: stepping back replays at most this many frames.
 pub(super) const CHECKPOINT_EVERY: u32 = 100;
@@ -38,11 +25,7 @@ impl SynthScene {
     /// The named scene.
     #[wasm_bindgen(constructor)]
     pub fn new(preset: Ts<ScenePreset>) -> Result<SynthScene, JsValue> {
-        let cfg = match rust(preset)? {
-            ScenePreset::Demo => SynthConfig::demo(),
-            ScenePreset::Default => SynthConfig::default(),
-            ScenePreset::Occlusion => SynthConfig::occlusion_scene(0),
-        };
+        let cfg = rust(preset)?.config(0);
         let scene = Scene::new(cfg).map_err(js_error)?;
         Ok(SynthScene {
             checkpoints: vec![scene.clone()],

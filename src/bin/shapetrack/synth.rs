@@ -19,19 +19,8 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::ImageEncoder;
 use shapetrack::io::motchallenge::{write_mot, write_mots, SeqInfo};
 use shapetrack::io::{write_text, IoError, Record};
-use shapetrack::synth::{BorderPolicy, Family, Scene, SynthConfig};
+use shapetrack::synth::{BorderPolicy, Family, Scene, ScenePreset as Preset, SynthConfig};
 use std::path::{Path, PathBuf};
-
-/// Base configurations to start from; explicit flags override them.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum Preset {
-    /// `SynthConfig::default()`: 10 shapes leaving and entering, one occluding bar.
-    Default,
-    /// `SynthConfig::occlusion_scene`: crossings and ~10-frame occlusions behind two bars.
-    Occlusion,
-    /// `SynthConfig::demo()`: 1280×720 browser demo scene.
-    Demo,
-}
 
 /// Border behaviour names for `--border`.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -106,11 +95,9 @@ pub struct Args {
 
 impl Args {
     fn config(&self) -> SynthConfig {
-        let mut c = match (self.family, self.preset) {
-            (Some(f), _) => SynthConfig::family(f, self.seed),
-            (None, Preset::Default) => SynthConfig::default(),
-            (None, Preset::Occlusion) => SynthConfig::occlusion_scene(self.seed),
-            (None, Preset::Demo) => SynthConfig::demo(),
+        let mut c = match self.family {
+            Some(f) => SynthConfig::family(f, self.seed),
+            None => self.preset.config(self.seed),
         };
         c.seed = self.seed;
         c.frames = self.frames.unwrap_or(c.frames);
