@@ -548,61 +548,69 @@ fn coasted_tails_are_dropped_unless_asked_for() {
     assert_eq!((kept.filled, kept.coasted_dropped), (0, 0));
 }
 
-/// The RLE history (what the browser keeps) gives the offline pass what the bitmap history
-/// gives it where the pass reads masks at a gap's ends: on a synthetic occlusion scene with
-/// frames, the same online output (masks as RLE), the same joins and the same observed shapes.
-/// Fills may differ: the hide check (`fill`) reads the mask areas of shapes near a gap's ends,
-/// which the RLE input leaves undecoded, so the browser path can fill a gap the bitmap path
-/// leaves as a hide (as the bindings did before they called the core; not changed here).
+/// The compact RLE history (what the browser and the CLI keep) gives the offline pass exactly
+/// what the bitmap history gives it, with the default config and the mask preset (which
+/// coasts masks) on a synthetic occlusion scene with frames: the same online output (masks as
+/// RLE), the same joins, fills and shapes, and every shape's mask, packed without decoding
+/// (`finish_packed`), equal to the bitmap result's mask.
 #[test]
-fn rle_history_gives_the_offline_pass_the_same_joins() {
+fn rle_history_gives_the_offline_pass_the_same_result() {
     use shapetrack::io::Rle;
     use shapetrack::synth::{Scene, SynthConfig};
     use shapetrack::track::offline::{RleHistory, RleShape};
-    let cfg = SynthConfig::occlusion_scene(0);
-    let (w, h) = (cfg.width, cfg.height);
-    let mut scene = Scene::new(cfg).unwrap();
-    let config = OfflineConfig::default();
-    let mut bitmaps = OfflineTracker::new(config.clone(), 30.0).unwrap();
-    let online = shapetrack::track::Tracker::new(config.online.clone()).unwrap();
-    let mut rles = OfflineTracker::<RleHistory>::with_history(online, config, 30.0).unwrap();
-    while let Some(f) = scene.frame() {
-        let image = f.frame().unwrap();
-        let a = bitmaps
-            .push_frame(Some(&image), &f.detections)
-            .unwrap()
-            .to_vec();
-        let b = rles.push_frame(Some(&image), &f.detections).unwrap();
-        let encoded: Vec<RleShape> = a.into_iter().map(|s| RleShape::new(s, w, h)).collect();
-        assert_eq!(b, &encoded[..]);
-    }
-    assert_eq!(rles.image_size(), Some((w, h)));
-    let expected = bitmaps.finish(|_| {}).unwrap();
-    let got = rles.relink(|_| {}).unwrap();
-    assert!(!expected.joins.is_empty() && expected.filled > 0);
-    assert_eq!(got.joins, expected.joins);
-    assert!(got.filled >= expected.filled);
-    let observed = |r: &OfflineResult| -> Vec<(TrackedShape, Option<Rle>)> {
-        let mut v: Vec<_> = r
+    use shapetrack::track::Config;
+    for online in [Config::default(), Config::masks()] {
+        let cfg = SynthConfig::occlusion_scene(0);
+        let (w, h) = (cfg.width, cfg.height);
+        let mut scene = Scene::new(cfg).unwrap();
+        let config = OfflineConfig {
+            online,
+            ..OfflineConfig::default()
+        };
+        let mut bitmaps = OfflineTracker::new(config.clone(), 30.0).unwrap();
+        let tracker = shapetrack::track::Tracker::new(config.online.clone()).unwrap();
+        let mut rles = OfflineTracker::<RleHistory>::with_history(tracker, config, 30.0).unwrap();
+        while let Some(f) = scene.frame() {
+            let image = f.frame().unwrap();
+            let a = bitmaps
+                .push_frame(Some(&image), &f.detections)
+                .unwrap()
+                .to_vec();
+            let b = rles.push_frame(Some(&image), &f.detections).unwrap();
+            let encoded: Vec<RleShape> = a.into_iter().map(|s| RleShape::new(s, w, h)).collect();
+            assert_eq!(b, &encoded[..]);
+        }
+        assert_eq!(rles.image_size(), Some((w, h)));
+        let expected = bitmaps.finish(|_| {}).unwrap();
+        assert!(expected.filled > 0);
+        assert!(expected
             .shapes
             .iter()
-            .filter(|s| !s.interpolated)
-            .map(|s| {
-                let mut s = s.clone();
-                let rle = s.mask.take().map(|m| Rle::from_mask(&m, w, h));
-                (s, rle)
-            })
-            .collect();
-        v.sort_by_key(|(s, _)| (s.frame, s.id));
-        v
-    };
-    let (g, e) = (observed(&got), observed(&expected));
-    assert_eq!(g.len(), e.len());
-    for ((gs, gm), (es, em)) in g.iter().zip(&e) {
-        assert_eq!(gs, es);
-        // Masks the RLE input decoded are the same masks.
-        if gm.is_some() {
-            assert_eq!(gm, em, "frame {} id {}", gs.frame, gs.id);
+            .any(|s| s.interpolated && s.det_index.is_none()));
+        let unmasked = |r: &OfflineResult| -> Vec<TrackedShape> {
+            r.shapes
+                .iter()
+                .map(|s| TrackedShape {
+                    mask: None,
+                    ..s.clone()
+                })
+                .collect()
+        };
+        let borrowed = rles.relink(|_| {}).unwrap();
+        let (got, masks) = rles.finish_packed(|_| {}).unwrap();
+        for r in [&borrowed, &got] {
+            assert_eq!(r.joins, expected.joins);
+            assert_eq!(
+                (r.filled, r.coasted_dropped),
+                (expected.filled, expected.coasted_dropped)
+            );
+            assert_eq!(unmasked(r), unmasked(&expected));
+        }
+        assert_eq!(masks.len(), expected.shapes.len());
+        for (s, m) in expected.shapes.iter().zip(&masks) {
+            let want = s.mask.as_ref().map(|m| Rle::from_mask(m, w, h));
+            let got = m.as_ref().map(|p| p.unpack());
+            assert_eq!(got, want, "frame {} id {}", s.frame, s.id);
         }
     }
 }

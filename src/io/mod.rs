@@ -20,7 +20,7 @@ pub mod vot;
 pub mod yolo;
 
 use crate::frame::{BBox, Mask, TrackedShape};
-pub use rle::{Rle, RleError};
+pub use rle::{PackedRle, Rle, RleError};
 use serde::{Deserialize, Serialize};
 use serde_json::value::RawValue;
 use std::collections::BTreeMap;

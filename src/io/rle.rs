@@ -133,6 +133,52 @@ pub(crate) fn for_each_run_pixel(runs: &[u64], line: u64, mut set: impl FnMut(u6
     }
 }
 
+/// An [`Rle`] kept in its compressed string form (pycocotools' `rleToString`, about one byte
+/// per run instead of four) with its area: what a long video's history of masks is stored as
+/// until the masks are read again.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct PackedRle {
+    height: u32,
+    width: u32,
+    area: u64,
+    compressed: Box<str>,
+}
+
+impl PackedRle {
+    /// Packs `rle`.
+    pub fn new(rle: &Rle) -> Self {
+        Self {
+            height: rle.height,
+            width: rle.width,
+            area: rle.area(),
+            compressed: rle.to_compressed().into_boxed_str(),
+        }
+    }
+
+    /// The mask as runs again.
+    pub fn unpack(&self) -> Rle {
+        // The string was written by `Rle::to_compressed`, which `from_compressed` reads back
+        // exactly; an empty mask stands in should that ever not hold.
+        Rle::from_compressed(&self.compressed, self.height, self.width)
+            .unwrap_or_else(|_| Rle::empty(self.width, self.height))
+    }
+
+    /// Foreground pixel count (kept: no unpacking).
+    pub fn area(&self) -> u64 {
+        self.area
+    }
+
+    /// Image width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The compressed string (what MOTS and COCO files hold).
+    pub fn compressed(&self) -> &str {
+        &self.compressed
+    }
+}
+
 impl Rle {
     /// Encodes a row-major full-image bitmap (`width·height` bytes, non-zero = foreground).
     pub fn encode(width: u32, height: u32, bitmap: &[u8]) -> Result<Rle, FrameError> {

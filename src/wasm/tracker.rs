@@ -65,7 +65,7 @@ pub struct Shapes(pub Vec<ShapeJs>);
 /// A kept shape as a record (its mask as RLE).
 fn record_of(k: &RleShape) -> Record {
     let mut r = Record::from_tracked(&k.shape, None);
-    r.mask = k.rle.clone();
+    r.mask = k.rle();
     r
 }
 
@@ -298,7 +298,7 @@ fn online_error(e: OfflineError) -> JsValue {
 fn shapes_js(shapes: &[RleShape]) -> Result<Ts<Shapes>, JsValue> {
     let out: Vec<ShapeJs> = shapes
         .iter()
-        .map(|k| ShapeJs::new(&k.shape, k.rle.as_ref()))
+        .map(|k| ShapeJs::new(&k.shape, k.rle().as_ref()))
         .collect();
     ts(&Shapes(out))
 }

@@ -17,8 +17,10 @@ use shapetrack::io::motchallenge::{
     SeqInfo,
 };
 use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, write_scalabel, Categories};
-use shapetrack::io::{image_files, read_text, write_text, AtomicFile, IoError, Record};
-use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase};
+use shapetrack::io::{
+    image_files, read_text, write_text, AtomicFile, IoError, PackedRle, Record, Rle,
+};
+use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase, RleHistory};
 use shapetrack::track::{detections_by_frame, to_records, Config, Preset, Tracker};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -309,6 +311,9 @@ enum Sink {
 /// those frames; both reach back at most a few times `min_hits` frames.
 const REORDER_FRAMES: u32 = 256;
 
+/// Shapes of an offline result written at a time (their masks unpacked together).
+const WRITE_CHUNK: usize = 4096;
+
 /// Counts of what was reported.
 #[derive(Default)]
 struct Tally {
@@ -396,7 +401,8 @@ fn same_file(a: &Path, b: &Path) -> bool {
 /// The tracker of the run: online alone, or inside the offline one.
 enum Runner {
     Online(Box<Tracker>),
-    Offline(Box<OfflineTracker>),
+    /// Masks kept as RLE until the offline pass: a long video's bitmaps never sit in memory.
+    Offline(Box<OfflineTracker<RleHistory>>),
 }
 
 impl Runner {
@@ -604,7 +610,8 @@ pub fn run(args: Args) -> crate::CliResult {
     // Online: the tracker alone. Offline: the same tracker inside the offline one, which keeps
     // appearance snapshots while frames stream through and runs the re-linker at the end.
     let mut runner = if args.offline {
-        let t = OfflineTracker::new(offline_config, fps)?;
+        let online = Tracker::new(offline_config.online.clone())?;
+        let t = OfflineTracker::<RleHistory>::with_history(online, offline_config, fps)?;
         Runner::Offline(Box::new(match image_size {
             Some((w, h)) => t.with_image_size(w, h),
             None => t,
@@ -715,10 +722,12 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         Sink::Collect(v) => Some(v),
     };
+    // The offline result's masks, packed, aligned with `shapes` (see `finish_packed`).
+    let mut packed: Option<Vec<Option<PackedRle>>> = None;
     if let Runner::Offline(t) = runner {
         let t0 = Instant::now();
         let mut last_phase = None;
-        let res = t.finish(|p| {
+        let (res, masks) = t.finish_packed(|p| {
             // One line per phase on stderr, so long runs show where they are.
             if last_phase != Some(p.phase) && p.phase != Phase::Done {
                 eprintln!("offline: {:?}", p.phase);
@@ -737,6 +746,7 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         tally = Tally::default();
         tally.add(&res.shapes);
+        packed = Some(masks);
         shapes = Some(res.shapes);
     }
     // Shapes not taken from a detection: coasted online over a missed detection, or filled
@@ -744,29 +754,78 @@ pub fn run(args: Args) -> crate::CliResult {
     summary.push_str(&format!(" interpolated={}", tally.interpolated));
 
     if let Some(mut shapes) = shapes {
-        if format == Format::Mots {
-            boxes_as_masks(&mut shapes);
-        }
-        let out_records = to_records(&shapes, first_frame, image_size);
-        let body = match format {
-            Format::Mot => write_mot(&out_records),
-            Format::Mots => write_mots(&out_records),
-            Format::Coco => coco(&out_records, num_frames, image_size)?,
-            Format::Cvat => cvat(&out_records, num_frames, image_size, &args.det)?,
-            Format::Scalabel => {
-                let (video, cats) = scalabel_video
-                    .clone()
-                    .unwrap_or_else(|| (task_name(&args.det), Categories::default()));
-                write_scalabel(&scalabel::from_records(
-                    &out_records,
-                    &video,
-                    num_frames,
-                    None,
-                    &cats,
-                ))?
+        let mots = format == Format::Mots;
+        // Records of some shapes, their masks unpacked from `packed` when given.
+        let records_of =
+            |shapes: &mut [TrackedShape], masks: Option<&mut [Option<PackedRle>]>| -> Vec<Record> {
+                let Some(masks) = masks else {
+                    if mots {
+                        boxes_as_masks(shapes);
+                    }
+                    return to_records(shapes, first_frame, image_size);
+                };
+                for s in shapes.iter_mut() {
+                    s.mask = None;
+                }
+                let mut records = to_records(shapes, first_frame, image_size);
+                for ((r, s), m) in records.iter_mut().zip(shapes.iter()).zip(masks) {
+                    r.mask = match m.take() {
+                        Some(p) => Some(p.unpack()),
+                        // MOTS has no box-only form (see `boxes_as_masks`).
+                        None => image_size
+                            .filter(|_| mots)
+                            .map(|(w, h)| Rle::from_mask(&Mask::from_bbox(&s.bbox), w, h)),
+                    };
+                }
+                records
+            };
+        match (format, packed) {
+            (Format::Mot | Format::Mots, Some(mut packed)) => {
+                // The offline result is in (frame, id) order: written a slice at a time, so
+                // its masks are never all unpacked at once.
+                let mut out = AtomicFile::create(&args.out)?;
+                for (sh, ms) in shapes
+                    .chunks_mut(WRITE_CHUNK)
+                    .zip(packed.chunks_mut(WRITE_CHUNK))
+                {
+                    let records = records_of(sh, Some(ms));
+                    let text = if mots {
+                        write_mots(&records)
+                    } else {
+                        write_mot(&records)
+                    };
+                    use std::io::Write as _;
+                    out.write_all(text.as_bytes())
+                        .map_err(|source| IoError::Io {
+                            file: args.out.display().to_string(),
+                            source,
+                        })?;
+                }
+                out.commit()?;
             }
-        };
-        write_text(&args.out, &body)?;
+            (_, mut packed) => {
+                let out_records = records_of(&mut shapes, packed.as_deref_mut());
+                let body = match format {
+                    Format::Mot => write_mot(&out_records),
+                    Format::Mots => write_mots(&out_records),
+                    Format::Coco => coco(&out_records, num_frames, image_size)?,
+                    Format::Cvat => cvat(&out_records, num_frames, image_size, &args.det)?,
+                    Format::Scalabel => {
+                        let (video, cats) = scalabel_video
+                            .clone()
+                            .unwrap_or_else(|| (task_name(&args.det), Categories::default()));
+                        write_scalabel(&scalabel::from_records(
+                            &out_records,
+                            &video,
+                            num_frames,
+                            None,
+                            &cats,
+                        ))?
+                    }
+                };
+                write_text(&args.out, &body)?;
+            }
+        }
     }
 
     if let Some(kb) = peak_memory_kb() {

@@ -24,10 +24,12 @@ use super::relink::{history_frames, rollout_backward, rollout_forward, track_end
 use super::{OfflineError, Phase, Progress};
 use crate::frame::{BBox, Point, TrackState, TrackedShape};
 
-/// Fills the gaps of `shapes` (final ids; `origin[i]` is shape `i`'s id before the joins).
-/// Returns the filled shapes (not yet merged into `shapes`).
+/// Fills the gaps of `shapes` (final ids; `origin[i]` is shape `i`'s id before the joins;
+/// `areas[i]` its mask area, given apart from the mask because a compact history carries the
+/// bitmaps of run ends only). Returns the filled shapes (not yet merged into `shapes`).
 pub(crate) fn fill_gaps(
     shapes: &[TrackedShape],
+    areas: &[Option<u64>],
     origin: &[u64],
     cfg: &FillConfig,
     relink: &RelinkConfig,
@@ -64,7 +66,7 @@ pub(crate) fn fill_gaps(
             if !joined && !cfg.within_tracks {
                 continue;
             }
-            if cfg.hidden_ratio > 0.0 && is_hide(shapes, &idx[..k], &idx[k..], cfg.hidden_ratio) {
+            if cfg.hidden_ratio > 0.0 && is_hide(areas, &idx[..k], &idx[k..], cfg.hidden_ratio) {
                 continue;
             }
             let path = match cfg.trajectory {
@@ -93,22 +95,20 @@ pub(crate) fn fill_gaps(
 const HIDE_REFERENCE: usize = 10;
 
 /// Whether the gap between the last shape of `before` and the first of `after` (indices into
-/// `shapes`, in frame order) is a hide: both ends are masks smaller than `ratio` times the
-/// median mask area of up to [`HIDE_REFERENCE`] shapes on their side.
-fn is_hide(shapes: &[TrackedShape], before: &[usize], after: &[usize], ratio: f64) -> bool {
+/// `areas`, the shapes' mask areas, in frame order) is a hide: both ends are masks smaller
+/// than `ratio` times the median mask area of up to [`HIDE_REFERENCE`] shapes on their side.
+fn is_hide(areas: &[Option<u64>], before: &[usize], after: &[usize], ratio: f64) -> bool {
+    let area = |i: usize| areas.get(i).copied().flatten();
     let partial = |side: &mut dyn Iterator<Item = &usize>, end: Option<&usize>| -> bool {
-        let Some(end_area) = end.and_then(|&i| shapes[i].mask.as_ref()).map(|m| m.area()) else {
+        let Some(end_area) = end.and_then(|&i| area(i)) else {
             return false;
         };
-        let mut areas: Vec<u64> = side
-            .take(HIDE_REFERENCE)
-            .filter_map(|&i| shapes[i].mask.as_ref().map(|m| m.area()))
-            .collect();
-        if areas.is_empty() {
+        let mut side_areas: Vec<u64> = side.take(HIDE_REFERENCE).filter_map(|&i| area(i)).collect();
+        if side_areas.is_empty() {
             return false;
         }
-        areas.sort_unstable();
-        let median = areas[areas.len() / 2] as f64;
+        side_areas.sort_unstable();
+        let median = side_areas[side_areas.len() / 2] as f64;
         (end_area as f64) < ratio * median
     };
     partial(&mut before.iter().rev(), before.last()) && partial(&mut after.iter(), after.first())
@@ -237,6 +237,13 @@ mod tests {
     use super::*;
     use crate::frame::Mask;
 
+    /// The mask area of each shape (`None` for a box), as [`fill_gaps`] reads it.
+    fn mask_areas(shapes: &[TrackedShape]) -> Vec<Option<u64>> {
+        super::super::OfflineInput::from_shapes(shapes.to_vec())
+            .mask_areas()
+            .to_vec()
+    }
+
     fn shape(id: u64, frame: u32, b: BBox) -> TrackedShape {
         TrackedShape {
             id,
@@ -276,6 +283,7 @@ mod tests {
             let origin = vec![1; shapes.len()];
             fill_gaps(
                 shapes,
+                &mask_areas(shapes),
                 &origin,
                 cfg,
                 &RelinkConfig::default(),
@@ -331,6 +339,7 @@ mod tests {
         let shapes = vec![a, b];
         let out = fill_gaps(
             &shapes,
+            &mask_areas(&shapes),
             &[1, 1],
             &FillConfig::default(),
             &RelinkConfig::default(),
@@ -361,6 +370,7 @@ mod tests {
         };
         let none = fill_gaps(
             &shapes,
+            &mask_areas(&shapes),
             &[1, 1],
             &cfg,
             &RelinkConfig::default(),
@@ -370,6 +380,7 @@ mod tests {
         assert!(none.unwrap().is_empty());
         let joined = fill_gaps(
             &shapes,
+            &mask_areas(&shapes),
             &[1, 2],
             &cfg,
             &RelinkConfig::default(),
@@ -384,6 +395,7 @@ mod tests {
         };
         let none = fill_gaps(
             &shapes,
+            &mask_areas(&shapes),
             &[1, 1],
             &cfg,
             &RelinkConfig::default(),
@@ -403,8 +415,10 @@ mod tests {
         let mut b = shape(3, 4, mb.bbox());
         b.mask = Some(mb.clone());
         b.centroid = mb.centroid().unwrap();
+        let shapes = [a, b];
         let out = fill_gaps(
-            &[a, b],
+            &shapes,
+            &mask_areas(&shapes),
             &[3, 3],
             &FillConfig::default(),
             &RelinkConfig::default(),

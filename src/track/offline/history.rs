@@ -1,15 +1,54 @@
 //! Where an [`OfflineTracker`](super::OfflineTracker) keeps the online output until the offline
 //! pass: the shapes as they are ([`Vec<TrackedShape>`], masks as bitmaps, the default), or with
-//! their masks as COCO RLE ([`RleHistory`]).
+//! their masks packed as COCO RLE strings ([`RleHistory`]).
 //!
-//! A mask bitmap is the size of its box; its RLE is a few hundred bytes. A front end that keeps
-//! a long video's output in memory (the browser app) keeps RLE, and the offline pass decodes
-//! only the masks it reads.
+//! A mask bitmap is the size of its box; its packed RLE is about a byte per run. What keeps a
+//! long video's output in memory (the browser app, the CLI's `--offline`) keeps packed RLE: the
+//! offline pass decodes only the masks a fill carries (the ends of runs of frames) and reads
+//! every shape's area from its RLE, so it decides as it does over bitmaps, and the result's
+//! masks are matched back to the packed ones ([`KeptMasks`]) without decoding them.
 
 use super::OfflineResult;
 use crate::frame::TrackedShape;
-use crate::io::Rle;
-use std::collections::HashSet;
+use crate::io::{PackedRle, Rle};
+use std::collections::{HashMap, HashSet};
+
+/// The online output as the offline stages read it: the shapes, and each shape's mask area
+/// (pixels; `None` for a box). The area is kept apart from the mask because a compact store
+/// carries the bitmaps of the ends of each track's runs of frames only (the fill carries those
+/// along a gap), while the fill's hide test reads the areas of shapes near a gap's ends.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OfflineInput {
+    pub(super) shapes: Vec<TrackedShape>,
+    pub(super) mask_areas: Vec<Option<u64>>,
+}
+
+impl OfflineInput {
+    /// The shapes as they are, areas from their masks.
+    pub fn from_shapes(shapes: Vec<TrackedShape>) -> Self {
+        let mask_areas = shapes
+            .iter()
+            .map(|s| s.mask.as_ref().map(|m| m.area()))
+            .collect();
+        Self { shapes, mask_areas }
+    }
+
+    /// Adds one shape whose mask (absent from `shape` or not) has `mask_area` pixels.
+    pub fn push(&mut self, shape: TrackedShape, mask_area: Option<u64>) {
+        self.shapes.push(shape);
+        self.mask_areas.push(mask_area);
+    }
+
+    /// The shapes.
+    pub fn shapes(&self) -> &[TrackedShape] {
+        &self.shapes
+    }
+
+    /// The mask areas, one per shape.
+    pub fn mask_areas(&self) -> &[Option<u64>] {
+        &self.mask_areas
+    }
+}
 
 /// A store for the online pass's shapes.
 pub trait History: Default {
@@ -21,9 +60,9 @@ pub trait History: Default {
     /// Everything kept, in the order pushed.
     fn items(&self) -> &[Self::Item];
     /// The shapes the offline stages read.
-    fn offline_input(&self) -> Vec<TrackedShape>;
+    fn offline_input(&self) -> OfflineInput;
     /// The same, consuming the store (no copy where it holds the shapes as they are).
-    fn into_offline_input(self) -> Vec<TrackedShape> {
+    fn into_offline_input(self) -> OfflineInput {
         self.offline_input()
     }
 }
@@ -39,29 +78,38 @@ impl History for Vec<TrackedShape> {
         self
     }
 
-    fn offline_input(&self) -> Vec<TrackedShape> {
-        self.clone()
+    fn offline_input(&self) -> OfflineInput {
+        OfflineInput::from_shapes(self.clone())
     }
 
-    fn into_offline_input(self) -> Vec<TrackedShape> {
-        self
+    fn into_offline_input(self) -> OfflineInput {
+        OfflineInput::from_shapes(self)
     }
 }
 
-/// One kept shape: the shape without its mask bitmap, and the mask as RLE of the whole image.
+/// One kept shape: the shape without its mask bitmap, and the mask as packed RLE of the
+/// whole image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RleShape {
-    /// The shape; its `mask` is `None` (the mask is in `rle`).
+    /// The shape; its `mask` is `None` (the mask is in `packed`).
     pub shape: TrackedShape,
     /// The shape's mask, when it has one.
-    pub rle: Option<Rle>,
+    pub packed: Option<PackedRle>,
 }
 
 impl RleShape {
     /// Keeps `shape` with its mask encoded for a `width × height` image.
     pub fn new(mut shape: TrackedShape, width: u32, height: u32) -> Self {
-        let rle = shape.mask.take().map(|m| Rle::from_mask(&m, width, height));
-        Self { shape, rle }
+        let packed = shape
+            .mask
+            .take()
+            .map(|m| PackedRle::new(&Rle::from_mask(&m, width, height)));
+        Self { shape, packed }
+    }
+
+    /// The mask as RLE, when the shape has one.
+    pub fn rle(&self) -> Option<Rle> {
+        self.packed.as_ref().map(PackedRle::unpack)
     }
 }
 
@@ -84,35 +132,130 @@ impl History for RleHistory {
         &self.shapes
     }
 
-    /// Masks are decoded only for shapes at the end of a run of consecutive frames of their
-    /// track: gap filling carries the mask of a gap's end along the path, so the whole video's
-    /// masks never sit in memory as bitmaps at once. The fill's hide check also reads the
-    /// mask areas of shapes near a gap's ends; without them it sees fewer hides than over
-    /// bitmaps, and fills such gaps (what the browser has always done).
-    fn offline_input(&self) -> Vec<TrackedShape> {
-        let present: HashSet<(u64, u32)> = self
+    /// Masks are decoded only for observed shapes at the end of a run of consecutive observed
+    /// frames of their track: gap filling carries the mask of a gap's end along the path, so
+    /// the whole video's masks never sit in memory as bitmaps at once. Every shape's mask area
+    /// comes from its RLE (the fill's hide test), so the offline pass decides as it does over
+    /// the bitmaps.
+    fn offline_input(&self) -> OfflineInput {
+        let mut input = OfflineInput::default();
+        for (k, end) in self.shapes.iter().zip(self.run_ends()) {
+            let mut s = k.shape.clone();
+            if end {
+                s.mask = k.rle().map(|r| r.to_mask());
+            }
+            input.push(s, k.packed.as_ref().map(PackedRle::area));
+        }
+        input
+    }
+
+    fn into_offline_input(self) -> OfflineInput {
+        self.into_parts().0
+    }
+}
+
+/// The masks of an [`RleHistory`] set apart by [`RleHistory::into_parts`], to be matched to
+/// the offline result's shapes without decoding them.
+#[derive(Debug, Clone, Default)]
+pub struct KeptMasks {
+    /// Observed shapes' masks by (frame, detection index): unique within a frame.
+    observed: HashMap<(u32, usize), PackedRle>,
+    /// Coasted shapes' masks by (online id, frame), with their boxes.
+    coasted: HashMap<(u64, u32), Vec<(crate::frame::BBox, PackedRle)>>,
+}
+
+impl KeptMasks {
+    /// The mask of each shape of `result` (the offline pass over the history these masks
+    /// came from), aligned with `result.shapes`: an observed shape takes the mask kept for its
+    /// detection, a coasted one the mask kept for its online identity (re-identified through
+    /// the joins), frame and box, a filled one its own bitmap, packed for an image of
+    /// `image_size`. `None` for shapes without a mask.
+    pub fn resolve(
+        mut self,
+        result: &OfflineResult,
+        image_size: Option<(u32, u32)>,
+    ) -> Vec<Option<PackedRle>> {
+        let map = result.id_map();
+        let mut coasted: HashMap<(u64, u32), Vec<(crate::frame::BBox, PackedRle)>> = HashMap::new();
+        for ((id, f), v) in self.coasted.drain() {
+            let root = map.get(&id).copied().unwrap_or(id);
+            coasted.entry((root, f)).or_default().extend(v);
+        }
+        let (w, h) = image_size.unwrap_or((0, 0));
+        result
             .shapes
             .iter()
-            .map(|k| (k.shape.id, k.shape.frame))
-            .collect();
-        self.shapes
-            .iter()
-            .map(|k| {
-                let (id, f) = (k.shape.id, k.shape.frame);
-                let end = f <= 1
-                    || !present.contains(&(id, f - 1))
-                    || !present.contains(&(id, f.saturating_add(1)));
-                let mut s = k.shape.clone();
-                if end {
-                    s.mask = k.rle.as_ref().map(Rle::to_mask);
-                }
-                s
+            .map(|s| {
+                let kept = match (s.interpolated, s.det_index) {
+                    (false, Some(d)) => self.observed.remove(&(s.frame, d)),
+                    _ => coasted.get_mut(&(s.id, s.frame)).and_then(|v| {
+                        let i = v.iter().position(|(b, _)| *b == s.bbox)?;
+                        Some(v.swap_remove(i).1)
+                    }),
+                };
+                kept.or_else(|| {
+                    s.mask
+                        .as_ref()
+                        .map(|m| PackedRle::new(&Rle::from_mask(m, w, h)))
+                })
             })
             .collect()
     }
 }
 
 impl RleHistory {
+    /// Splits the history into the offline pass's input (see [`History::offline_input`],
+    /// built without copying the shapes) and the masks, kept packed for writing the result.
+    pub fn into_parts(self) -> (OfflineInput, KeptMasks) {
+        let ends = self.run_ends();
+        let mut input = OfflineInput::default();
+        let mut kept = KeptMasks::default();
+        for (k, end) in self.shapes.into_iter().zip(ends) {
+            let RleShape { mut shape, packed } = k;
+            if end {
+                shape.mask = packed.as_ref().map(|p| p.unpack().to_mask());
+            }
+            let area = packed.as_ref().map(PackedRle::area);
+            if let Some(p) = packed {
+                match (shape.interpolated, shape.det_index) {
+                    (false, Some(d)) => {
+                        kept.observed.entry((shape.frame, d)).or_insert(p);
+                    }
+                    _ => kept
+                        .coasted
+                        .entry((shape.id, shape.frame))
+                        .or_default()
+                        .push((shape.bbox, p)),
+                }
+            }
+            input.push(shape, area);
+        }
+        (input, kept)
+    }
+
+    /// For each kept shape, whether its mask is decoded for the offline pass: observed shapes
+    /// at the end of a run of consecutive observed frames of their track (gap filling carries
+    /// the mask of a gap's end along the path). Coasted shapes (interpolated) are not
+    /// observations: an observed shape beside one still ends a run.
+    fn run_ends(&self) -> Vec<bool> {
+        let observed: HashSet<(u64, u32)> = self
+            .shapes
+            .iter()
+            .filter(|k| !k.shape.interpolated)
+            .map(|k| (k.shape.id, k.shape.frame))
+            .collect();
+        self.shapes
+            .iter()
+            .map(|k| {
+                let (id, f) = (k.shape.id, k.shape.frame);
+                !k.shape.interpolated
+                    && (f <= 1
+                        || !observed.contains(&(id, f - 1))
+                        || !observed.contains(&(id, f.saturating_add(1))))
+            })
+            .collect()
+    }
+
     /// Applies an offline result to the online output a front end has already shown, in
     /// place: ids become the joined identities', the online pass's coasted shapes stay (they
     /// were shown) except where an observation of the joined identity covers their frame,

@@ -70,7 +70,7 @@ pub use appearance::{Snapshot, Snapshots};
 pub use config::{
     AppearanceConfig, FillConfig, JoinSolver, OfflineConfig, RelinkConfig, Trajectory,
 };
-pub use history::{History, RleHistory, RleShape};
+pub use history::{History, KeptMasks, OfflineInput, RleHistory, RleShape};
 pub use relink::{fit_motion, rollout_backward, rollout_forward, EndState, Join};
 
 use super::{TrackError, Tracker};
@@ -240,6 +240,26 @@ pub fn relink(
     seq: &SequenceInfo,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<OfflineResult, OfflineError> {
+    relink_input(
+        OfflineInput::from_shapes(shapes),
+        snapshots,
+        config,
+        seq,
+        progress,
+    )
+}
+
+/// [`relink()`] over an [`OfflineInput`]: shapes whose masks may be carried as areas only
+/// (what a compact [`History`] gives). The result is the same as over the full bitmaps as
+/// long as the shapes at the ends of each track's runs of frames carry theirs.
+pub fn relink_input(
+    input: OfflineInput,
+    snapshots: Option<&Snapshots>,
+    config: &OfflineConfig,
+    seq: &SequenceInfo,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<OfflineResult, OfflineError> {
+    let OfflineInput { shapes, mask_areas } = input;
     config.validate()?;
     check_fps(seq.fps)?;
     let fps = seq.fps;
@@ -278,8 +298,18 @@ pub fn relink(
     // (and, unless `fill.coasted_tails`, only before that identity's last observation).
     // Otherwise a slave's coasted tail overlaps its master's first frames (no join possible)
     // and a gap's predictions stand where the two observed ends give a better estimate.
-    let (shapes, coasted): (Vec<TrackedShape>, Vec<TrackedShape>) =
-        shapes.into_iter().partition(|s| !s.interpolated);
+    let mut areas = Vec::with_capacity(shapes.len());
+    let mut observed = Vec::with_capacity(shapes.len());
+    let mut coasted = Vec::new();
+    for (s, a) in shapes.into_iter().zip(mask_areas) {
+        if s.interpolated {
+            coasted.push(s);
+        } else {
+            observed.push(s);
+            areas.push(a);
+        }
+    }
+    let shapes = observed;
     let pieces = relink::pieces(&shapes);
     let use_appearance = config.appearance.enabled && snapshots.is_some_and(|s| !s.is_empty());
     let mut cache = match snapshots {
@@ -311,6 +341,7 @@ pub fn relink(
     }
     let filled = fill::fill_gaps(
         &shapes,
+        &areas,
         &origin,
         &config.fill,
         &config.relink,
@@ -512,8 +543,8 @@ impl<H: History> OfflineTracker<H> {
     /// Runs the offline stages on everything pushed (see [`relink()`]).
     pub fn finish(self, mut progress: impl FnMut(Progress)) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
-        let shapes = self.shapes.into_offline_input();
-        relink(shapes, snaps, &self.config, &self.seq, &mut progress)
+        let input = self.shapes.into_offline_input();
+        relink_input(input, snaps, &self.config, &self.seq, &mut progress)
     }
 
     /// The offline stages on everything pushed so far, leaving the tracker as it is: a front
@@ -523,12 +554,26 @@ impl<H: History> OfflineTracker<H> {
         mut progress: impl FnMut(Progress),
     ) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
-        let shapes = self.shapes.offline_input();
-        relink(shapes, snaps, &self.config, &self.seq, &mut progress)
+        let input = self.shapes.offline_input();
+        relink_input(input, snaps, &self.config, &self.seq, &mut progress)
     }
 }
 
 impl OfflineTracker<RleHistory> {
+    /// Runs the offline stages on everything pushed, as [`OfflineTracker::finish`], and
+    /// returns with the result each of its shapes' masks, packed (see [`KeptMasks::resolve`]):
+    /// a long video's masks are never all decoded at once, and the shapes are not copied.
+    pub fn finish_packed(
+        self,
+        mut progress: impl FnMut(Progress),
+    ) -> Result<(OfflineResult, Vec<Option<crate::io::PackedRle>>), OfflineError> {
+        let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
+        let (input, kept) = self.shapes.into_parts();
+        let result = relink_input(input, snaps, &self.config, &self.seq, &mut progress)?;
+        let masks = kept.resolve(&result, self.seq.image_size);
+        Ok((result, masks))
+    }
+
     /// Applies `result` (from [`OfflineTracker::relink`]) to the kept output in place, for a
     /// front end that has shown the online output as it came (see [`RleHistory::apply`]), and
     /// frees the appearance snapshots. Returns the shapes added. No frame may follow.
