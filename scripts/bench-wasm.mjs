@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // The wasm half of `shapetrack bench --wasm SCENE`: tracks one of the synthetic scenes the app
 // offers (the same SynthConfig as the native side renders) with the browser build of the core
-// (www/pkg: size-optimised, wasm-opt) in Node, masks with frames and the mask preset, and prints
+// (www/pkg: opt-level 3, SIMD, wasm-opt) in Node, masks with frames and the mask preset, and prints
 // one JSON line with the tracker's milliseconds per frame. Rendering is not timed; the call into
 // wasm and the shapes coming back to JS are.
 //
