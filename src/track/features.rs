@@ -167,7 +167,11 @@ pub struct AppearanceConfig {
     /// Default 0.2 (costs are in `[0, 1]`).
     pub ambiguity: f64,
     /// A track's reference appearance (used to re-identify it after a loss) is recomputed when
-    /// it is older than this many frames and the shape is seen whole. Default 10.
+    /// it is older than this many frames and the shape is seen whole (it is also taken before a
+    /// crossing, and whenever it is missing). Default 60 (2 s at 30 fps): each refresh runs
+    /// SIFT, and on the grid's mask cells every value from 40 frames up scores the same while
+    /// 10 and 20 score lower (`tests/data/quality/README.md`); the bound is kept for real
+    /// footage, whose views drift more than the synthetic shapes' do.
     pub refresh: u32,
     /// A detection is "whole" when its area is at least this fraction of its track's reference
     /// area; smaller ones are taken as partly occluded. Default 0.85: a partial view must be
@@ -195,7 +199,7 @@ impl Default for AppearanceConfig {
             },
             lazy: true,
             ambiguity: 0.2,
-            refresh: 10,
+            refresh: 60,
             whole_ratio: 0.85,
         }
     }
