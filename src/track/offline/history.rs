@@ -140,11 +140,8 @@ impl History for RleHistory {
     fn offline_input(&self) -> OfflineInput {
         let mut input = OfflineInput::default();
         for (k, end) in self.shapes.iter().zip(self.run_ends()) {
-            let mut s = k.shape.clone();
-            if end {
-                s.mask = k.rle().map(|r| r.to_mask());
-            }
-            input.push(s, k.packed.as_ref().map(PackedRle::area));
+            let (s, area) = input_shape(k.shape.clone(), k.packed.as_ref(), end);
+            input.push(s, area);
         }
         input
     }
@@ -152,6 +149,19 @@ impl History for RleHistory {
     fn into_offline_input(self) -> OfflineInput {
         self.into_parts().0
     }
+}
+
+/// A kept shape as the offline pass reads it: its mask decoded when it ends a run of frames
+/// (`end`, see `RleHistory::run_ends`), and its mask area either way.
+fn input_shape(
+    mut shape: TrackedShape,
+    packed: Option<&PackedRle>,
+    end: bool,
+) -> (TrackedShape, Option<u64>) {
+    if end {
+        shape.mask = packed.map(|p| p.unpack().to_mask());
+    }
+    (shape, packed.map(PackedRle::area))
 }
 
 /// The masks of an [`RleHistory`] set apart by [`RleHistory::into_parts`], to be matched to
@@ -211,11 +221,8 @@ impl RleHistory {
         let mut input = OfflineInput::default();
         let mut kept = KeptMasks::default();
         for (k, end) in self.shapes.into_iter().zip(ends) {
-            let RleShape { mut shape, packed } = k;
-            if end {
-                shape.mask = packed.as_ref().map(|p| p.unpack().to_mask());
-            }
-            let area = packed.as_ref().map(PackedRle::area);
+            let RleShape { shape, packed } = k;
+            let (shape, area) = input_shape(shape, packed.as_ref(), end);
             if let Some(p) = packed {
                 match (shape.interpolated, shape.det_index) {
                     (false, Some(d)) => {
