@@ -5,7 +5,9 @@
 
 use proptest::prelude::*;
 use shapetrack::frame::{BBox, Detection, Mask, TrackState, TrackedShape};
-use shapetrack::track::{Candidate, Config, PairCost, ReportBox, Track, TrackError, Tracker};
+use shapetrack::track::{
+    Candidate, Config, Hindsight, PairCost, ReportBox, Track, TrackError, Tracker,
+};
 
 fn det(x: f64, y: f64) -> Detection {
     Detection::from_box(BBox::new(x, y, 40.0, 80.0), 0.99)
@@ -78,6 +80,55 @@ fn tentative_track_dies_on_its_first_miss() {
     t.update(None, &[]).unwrap();
     assert!(t.tracks().is_empty());
     assert_eq!(t.ids_issued(), 0);
+}
+
+/// An object moving 3 px a frame, seen in frames 1–2 and 4–5 (each piece too short to be
+/// confirmed, each removed at its first miss) and from frame 8 on, and a one-off pair of views
+/// far away in frames 1–2. Returns every shape reported.
+fn entering_late(hindsight: Option<Hindsight>) -> Vec<TrackedShape> {
+    let mut t = Tracker::new(Config {
+        hindsight,
+        ..config()
+    })
+    .unwrap();
+    let mut out = Vec::new();
+    for f in 1..=10u32 {
+        let x = 3.0 * f64::from(f);
+        let mut dets = Vec::new();
+        if ![3, 6, 7].contains(&f) {
+            dets.push(det(x, 0.0));
+        }
+        if f <= 2 {
+            dets.push(det(400.0, 300.0));
+        }
+        out.extend(t.update(None, &dets).unwrap());
+    }
+    out.sort_by_key(|s| (s.frame, s.id));
+    out
+}
+
+#[test]
+fn hindsight_reports_the_views_of_earlier_pieces_under_the_confirmed_id() {
+    // Without hindsight the early pieces are lost recall: the track starts at frame 8.
+    let plain = entering_late(None);
+    assert_eq!(plain.iter().map(|s| s.frame).min(), Some(8));
+    // With it, the confirmed track also reports frames 1, 2, 4 and 5 (chained pieces), under
+    // its id and as ordinary views; the far pair, attached to no confirmed track, never is.
+    let seen = entering_late(Some(Hindsight::default()));
+    assert_eq!(ids(&seen), [1, 2, 4, 5, 8, 9, 10].map(|f| (f, 1)).to_vec());
+    assert!(seen
+        .iter()
+        .all(|s| s.state == TrackState::Confirmed && !s.interpolated && s.bbox.y == 0.0));
+    // A gap longer than `max_gap` is not bridged: the pieces (one frame apart) chain, but
+    // two frames separate them from the track.
+    let short = entering_late(Some(Hindsight {
+        max_gap: 1,
+        ..Hindsight::default()
+    }));
+    assert_eq!(
+        short.iter().map(|s| s.frame).collect::<Vec<_>>(),
+        [8, 9, 10]
+    );
 }
 
 fn confirmed_moving_track(t: &mut Tracker) -> u64 {

@@ -6,6 +6,7 @@
 
 use super::coasting::Coasting;
 use super::features::{AppearanceConfig, Needs};
+use super::hindsight::Hindsight;
 use super::scores::ScoreAdaptation;
 use super::TrackError;
 use crate::features::sift::MatchConfig;
@@ -270,6 +271,10 @@ pub struct Config {
     /// returned by the `update` that confirms the track, with their own frame numbers.
     /// Default true.
     pub report_tentative: bool,
+    /// Also report, under a newly confirmed track's id, the views of a removed tentative track
+    /// whose motion leads to it (see [`super::hindsight`]; needs `report_tentative`). Default
+    /// on, with [`Hindsight::default`]; the mask preset too.
+    pub hindsight: Option<Hindsight>,
     /// The region estimator grows each track's predicted box by this fraction of its size on
     /// every side; only pairs whose grown box meets the detection are scored at all.
     /// Default 0.5.
@@ -441,6 +446,7 @@ impl Default for Config {
             max_tentative_misses: 1,
             max_lost: 30,
             report_tentative: true,
+            hindsight: Some(Hindsight::default()),
             region_margin: 0.5,
             region_margin_per_miss: 0.1,
             max_cost: 0.75,
@@ -576,6 +582,9 @@ impl Config {
             reason,
         };
         if let Some(a) = &self.coasting {
+            a.validate().map_err(sub)?;
+        }
+        if let Some(a) = &self.hindsight {
             a.validate().map_err(sub)?;
         }
         if let Some(a) = &self.score_adaptation {

@@ -455,6 +455,22 @@ impl Track {
         out
     }
 
+    /// The held tentative shapes, in frame order.
+    pub(crate) fn held(&self) -> &[TrackedShape] {
+        &self.pending
+    }
+
+    /// Takes the held tentative shapes away (a removed track's, for hindsight).
+    pub(crate) fn take_held(&mut self) -> Vec<TrackedShape> {
+        std::mem::take(&mut self.pending)
+    }
+
+    /// Puts `earlier` (shapes of frames before the held ones) in front of the held shapes.
+    pub(crate) fn prepend_held(&mut self, mut earlier: Vec<TrackedShape>) {
+        earlier.append(&mut self.pending);
+        self.pending = earlier;
+    }
+
     /// Forgets the held tentative shapes (when they are not reported).
     pub(crate) fn drop_held(&mut self) {
         self.pending = Vec::new();

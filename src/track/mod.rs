@@ -41,6 +41,7 @@ mod describe;
 mod estimate;
 pub mod features;
 mod fragments;
+pub mod hindsight;
 mod lifecycle;
 pub mod offline;
 pub mod online;
@@ -63,6 +64,7 @@ pub use features::{
     Appearance, AppearanceConfig, BoxFeatures, FeatureExtractor, Features, MaskFeatures, Needs,
     ShellMode,
 };
+pub use hindsight::Hindsight;
 pub use lifecycle::Track;
 pub use online::Tracker;
 pub use regions::{estimate_regions, Cluster, Regions};

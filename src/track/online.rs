@@ -63,6 +63,7 @@ use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::estimate::NoiseFit;
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
 use super::fragments::{merge_fragments, Merge};
+use super::hindsight::Removed;
 use super::lifecycle::{two_mut, BoxMotion, Track};
 use super::prepare::{check_frame_size, kept, prepare, shape_of, validate, Prepared};
 use super::regions::{estimate_regions, Regions};
@@ -100,6 +101,8 @@ pub struct Tracker {
     thresholds: Thresholds,
     /// How this tracker's gaps ended, for adaptive coasting.
     gaps: GapStats,
+    /// Removed tentative tracks' views, for [`Config::hindsight`].
+    removed: Removed,
     timer: Timer,
     /// The camera's motion as followed so far.
     camera: Camera,
@@ -154,6 +157,7 @@ impl Tracker {
             scores,
             thresholds,
             gaps: GapStats::default(),
+            removed: Removed::default(),
             timer: Timer::default(),
             camera: Camera::default(),
             noise: NoiseFit::default(),
@@ -566,6 +570,13 @@ impl Tracker {
             let Some(d) = dets.get(m.det) else {
                 continue;
             };
+            if let Some(h) = &self.config.hindsight {
+                let gap = self.config.frames(h.max_gap);
+                let t = &mut self.tracks[m.track];
+                if let Some(earlier) = self.removed.take_leading_to(t.held(), h, gap) {
+                    t.prepend_held(earlier);
+                }
+            }
             // A shape that reappears from behind an occluder may start a new track before it
             // is recognised (its first views are slivers); at confirmation, with min_hits views
             // of evidence, a lost track it matches takes it over, history included.
@@ -689,6 +700,10 @@ impl Tracker {
             self.config.max_tentative_misses,
             self.config.frames(self.config.max_lost),
         );
+        let hindsight = self
+            .config
+            .hindsight
+            .map(|h| (h, self.config.frames(h.max_gap)));
         for (i, t) in self.tracks.iter_mut().enumerate() {
             if !matched.get(i).copied().unwrap_or(false) {
                 self.camera.follow_missed(t);
@@ -696,7 +711,18 @@ impl Tracker {
                 if t.state() == TrackState::Removed && t.id().is_some() {
                     self.gaps.ended(t.misses());
                 }
+                if let (TrackState::Removed, None, Some((h, gap))) = (t.state(), t.id(), &hindsight)
+                {
+                    self.removed.keep(t.take_held(), h, *gap);
+                }
             }
+        }
+        if let Some((_, gap)) = hindsight {
+            // A piece can still be attached to a track whose first view is `gap` frames after
+            // it and that is confirmed later; a track still tentative after this many frames
+            // has long been removed (every miss beyond `max_tentative_misses` removes it).
+            let span = gap + 1 + 4 * self.config.confirm_hits() * (tentative + 1);
+            self.removed.forget_before(self.frame.saturating_sub(span));
         }
         self.tracks.retain(|t| t.state() != TrackState::Removed);
     }
