@@ -91,6 +91,8 @@ function exposeForTests(app) {
       selection: app.selection,
       scores: app.scores,
       canUndo: app.model.canUndo,
+      following: app.following !== null,
+      tool: app.shapeTool.mode,
       status: byId('status').textContent,
     }),
     /** Every record as the table holds it (frame, id, bbox, ...). */
