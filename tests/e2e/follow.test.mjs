@@ -106,7 +106,8 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
 
   // The object to follow: the largest one of frame 1 that stays in view for the whole run.
   const last = 1 + FOLLOW_FRAMES;
-  const truth = await sceneTruth(page, last);
+  // Truth beyond the run too: the follow is extended by 20 frames below.
+  const truth = await sceneTruth(page, last + 20);
   const present = (/** @type {number} */ gid) => Object.values(truth).every((recs) => recs.some((r) => r.id === gid && r.mask));
   const target = truth[1].filter((r) => present(r.id)).sort((a, b) => b.bbox.w * b.bbox.h - a.bbox.w * a.bbox.h)[0];
   assert.ok(target, 'an object stays in view for 100 frames');
@@ -176,16 +177,75 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   assert.deepEqual(await trackRecords(page, id), second);
   await page.keyboard.press('Control+z');
 
+  /**
+   * IoU figures of track `tid` over `fs` against the target, printed and checked (≥ 0.5 on
+   * ≥ 90 % of the frames).
+   * @param {string} what
+   * @param {number} tid
+   * @param {number[]} fs
+   */
+  const expectFollowed = async (what, tid, fs) => {
+    const v = await ious(page, tid, truth, target.id, fs);
+    const n = v.filter((x) => x >= 0.5).length;
+    console.log(`${what}: IoU ≥ 0.5 on ${n}/${v.length} frames, mean ${(v.reduce((s, x) => s + x, 0) / v.length).toFixed(3)}`);
+    assert.ok(n >= 0.9 * v.length, `${what}: IoU ≥ 0.5 on ${n} of ${v.length} frames`);
+  };
+
+  // Click the followed shape on frame 101 (no tool: a click selects) and press F: the follow
+  // goes on for 20 frames from that shape, which becomes a keyframe.
+  await page.keyboard.press('Escape'); // the box tool off
+  await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.seek(101));
+  await untilState(page, (s) => s.frame === 101 && s.tool === null);
+  const r101 = first.find((/** @type {any} */ r) => r.frame === 101);
+  const screen = await page.locator('#overlay').boundingBox();
+  assert.ok(screen && r101);
+  await page.mouse.click(
+    screen.x + ((r101.bbox.x + r101.bbox.w / 2) / 1280) * screen.width,
+    screen.y + ((r101.bbox.y + r101.bbox.h / 2) / 720) * screen.height,
+  );
+  await untilState(page, (s) => s.selection.a === id);
+  await page.fill('#fol-len', '20');
+  await page.evaluate(() => /** @type {HTMLElement} */ (document.activeElement)?.blur());
+  await page.keyboard.press('f');
+  await untilState(page, (s) => !s.following && /20 frames followed from frame 101/.test(s.status), 180_000);
+  const extended = await trackRecords(page, id);
+  assert.equal(extended.length, last + 20);
+  assert.deepEqual(extended.filter((/** @type {any} */ r) => r.keyframe).map((/** @type {any} */ r) => r.frame), [1, 101]);
+  await expectFollowed('picked on frame 101, followed 20 frames on', id, Array.from({ length: 20 }, (_, i) => last + 1 + i));
+  await page.keyboard.press('Control+z');
+
+  // A polygon (the box's corners, clicked; Enter closes it) on frame 101 with nothing
+  // selected is a new track, followed backward 30 frames.
+  await page.keyboard.press('Escape'); // deselect
+  await page.selectOption('#fol-dir', 'backward');
+  await page.fill('#fol-len', '30');
+  await page.evaluate(() => /** @type {HTMLElement} */ (document.activeElement)?.blur());
+  await page.keyboard.press('p');
+  await untilState(page, (s) => s.tool === 'polygon' && s.selection.a === null);
+  const g = truth[last].find((r) => r.id === target.id);
+  assert.ok(g);
+  for (const [x, y] of [[g.bbox.x, g.bbox.y], [g.bbox.x + g.bbox.w, g.bbox.y], [g.bbox.x + g.bbox.w, g.bbox.y + g.bbox.h], [g.bbox.x, g.bbox.y + g.bbox.h]]) {
+    await page.mouse.click(screen.x + (x / 1280) * screen.width, screen.y + (y / 720) * screen.height);
+  }
+  await page.keyboard.press('Enter');
+  const back = await untilState(page, (s) => !s.following && /30 frames followed from frame 101/.test(s.status), 180_000);
+  const backId = back.selection.a;
+  assert.notEqual(backId, id);
+  const backRecs = await trackRecords(page, backId);
+  assert.deepEqual(backRecs.map((/** @type {any} */ r) => r.frame), Array.from({ length: 31 }, (_, i) => last - 30 + i));
+  await expectFollowed('a polygon on frame 101, followed 30 frames back', backId, Array.from({ length: 30 }, (_, i) => last - 30 + i));
+  await page.keyboard.press('Control+z');
+  await page.keyboard.press('Escape'); // the polygon tool off
+
   // Cancel: a long follow (300 frames, from frame 101 on) stops when asked, keeps what it
   // followed, and is one edit that undo takes back.
+  await page.selectOption('#fol-dir', 'forward');
   await page.fill('#fol-len', '300');
   // Out of the field: shortcuts do not fire while typing in it.
   await page.evaluate(() => /** @type {HTMLElement} */ (document.activeElement)?.blur());
-  await page.keyboard.press('Escape'); // the box tool off ...
-  await page.keyboard.press('Escape'); // ... and the selection cleared: the next box is a new track
+  await page.keyboard.press('Escape'); // deselect: the next box is a new track
   await page.keyboard.press('x');
-  await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.seek(101));
-  await untilState(page, (s) => s.frame === 101 && s.tool === 'box');
+  await untilState(page, (s) => s.frame === 101 && s.tool === 'box' && s.selection.a === null);
   const g101 = truth[101].find((r) => r.id === target.id);
   assert.ok(g101);
   const beforeCancel = JSON.stringify(await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records()));
@@ -221,4 +281,9 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   assert.match(bad.stepless, /no follow under way/);
   assert.equal(bad.after, 'no error');
   assert.deepEqual(errors, []);
+});
+
+test('no request left localhost', () => {
+  assert.ok(app.browser.requests.length > 0);
+  assert.deepEqual(app.browser.foreign, []);
 });
