@@ -9,7 +9,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readdirSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { ROOT, docShot, untilState, watchErrors, withApp } from './harness.mjs';
+import { OUT, ROOT, docShot, untilState, watchErrors, withApp } from './harness.mjs';
 
 const PORT = 47398;
 const FOLLOW_FRAMES = 100;
@@ -145,7 +145,23 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   // The timeline says which span was followed (its tooltip names the kind of each cell).
   await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.seek(51));
   await untilState(page, (s) => s.frame === 51);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(() => r(undefined)))));
+  await page.screenshot({ path: join(OUT, 'follow.png') });
   await docShot(page, 'follow');
+  const cell = await page.evaluate(
+    ({ id }) => {
+      const tl = /** @type {any} */ (window).__shapetrack.app.timeline;
+      const r = tl.last.table.get(1, id);
+      return { keyframe: !!r?.keyframe, source: r?.source };
+    },
+    { id },
+  );
+  assert.deepEqual(cell, { keyframe: true, source: 'follow' });
+  // The legend names the follow's marks.
+  await page.click('#legend-open');
+  assert.match((await page.locator('#legend li[data-legend="followed"]').textContent()) ?? '', /keyframe/);
+  await page.keyboard.press('Escape');
+  await page.waitForFunction(() => !document.querySelector('#help-dialog')?.hasAttribute('open'));
 
   // A corrected keyframe at frame 51 (the track stays selected): the box the truth gives there.
   const g51 = truth[51].find((r) => r.id === target.id);
