@@ -195,6 +195,31 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   assert.deepEqual(await trackRecords(page, id), second);
   await page.keyboard.press('Control+z');
 
+  // Moving a followed shape is a correction too: drag track's shape on frame 51 by 12 px to
+  // the right (no tool: the tool is switched off first).
+  await page.keyboard.press('Escape'); // the box tool off
+  await untilState(page, (s) => s.tool === null && s.selection.a === id && s.frame === 51);
+  const r51 = first.find((/** @type {any} */ r) => r.frame === 51);
+  {
+    const sc = await page.locator('#overlay').boundingBox();
+    assert.ok(sc);
+    const cx = sc.x + ((r51.bbox.x + r51.bbox.w / 2) / 1280) * sc.width;
+    const cy = sc.y + ((r51.bbox.y + r51.bbox.h / 2) / 720) * sc.height;
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    await page.mouse.move(cx + (12 / 1280) * sc.width, cy, { steps: 4 });
+    await page.mouse.up();
+  }
+  await untilState(page, (s) => !s.following && /followed from frame 51/.test(s.status), 180_000);
+  const moved = await trackRecords(page, id);
+  const m51 = moved.find((/** @type {any} */ r) => r.frame === 51);
+  assert.ok(m51.keyframe, 'the moved shape is a keyframe');
+  assert.ok(Math.abs(m51.bbox.x - r51.bbox.x - 12) <= 1, `moved by 12 px: ${r51.bbox.x} -> ${m51.bbox.x}`);
+  for (const r of moved) if (r.frame < 51) assert.equal(JSON.stringify(r), old.get(r.frame), `frame ${r.frame} untouched by the move`);
+  console.log(`moved on frame 51: ${moved.filter((/** @type {any} */ r) => r.frame > 51 && JSON.stringify(r) !== old.get(r.frame)).length} of the records after it changed`);
+  await page.keyboard.press('Control+z');
+  assert.equal(JSON.stringify(await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records())), before);
+
   /**
    * IoU figures of track `tid` over `fs` against the target, printed and checked (≥ 0.5 on
    * ≥ 90 % of the frames).
@@ -211,7 +236,6 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
 
   // Click the followed shape on frame 101 (no tool: a click selects) and press F: the follow
   // goes on for 20 frames from that shape, which becomes a keyframe.
-  await page.keyboard.press('Escape'); // the box tool off
   await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.seek(101));
   await untilState(page, (s) => s.frame === 101 && s.tool === null);
   const r101 = first.find((/** @type {any} */ r) => r.frame === 101);

@@ -15,7 +15,9 @@ import {
   correctionLeg,
   followLegs,
   followedRun,
+  isFollowed,
   rasterize,
+  shiftBitmap,
   stepRecord,
 } from './model/follow.js';
 import { ShapeTool } from './view/shapetool.js';
@@ -636,14 +638,23 @@ export class App {
   }
 
   /**
-   * A box or polygon drawn on the stage: with a followed track selected and this frame inside
-   * its followed run, a corrected keyframe that re-propagates the frames it affects; with
-   * another track selected, that track followed from the drawn shape; else a new track.
+   * A box or polygon drawn on the stage (see `shapeGiven`).
    * @param {import('./view/shapetool.js').Shape} shape
    */
   async shapeDrawn(shape) {
     const { width, height } = this.stage;
-    const bitmap = rasterize(shape, width, height);
+    await this.shapeGiven(rasterize(shape, width, height));
+  }
+
+  /**
+   * A shape the labeller gave on this frame (drawn, or a followed shape dragged), as a
+   * full-frame bitmap: with a followed track selected and this frame inside its followed run,
+   * a corrected keyframe that re-propagates the frames it affects; with another track
+   * selected, that track followed from the shape; else a new track.
+   * @param {Uint8Array} bitmap
+   */
+  async shapeGiven(bitmap) {
+    const { width, height } = this.stage;
     const bbox = bitmapBox(bitmap, width) ?? { x: 0, y: 0, w: 0, h: 0 };
     checkShape({ bbox });
     const mask = this.core.encodeMask(width, height, bitmap);
@@ -666,6 +677,39 @@ export class App {
     } else {
       await this.followFrom(sel, key, followLegs({ frame, frames: this.session.frames, ...this.followSettings() }));
     }
+  }
+
+  /**
+   * A drag of the selected track's followed shape (no drawing tool): where it started, and how
+   * far it has gone (image pixels). Released, the moved shape is a corrected keyframe.
+   * @type {{ id: number, from: { x: number, y: number }, dx: number, dy: number } | null}
+   */
+  moving = null;
+
+  /**
+   * Starts dragging the shape under `p` when it is the selected track's followed shape.
+   * @param {{ x: number, y: number }} p
+   * @returns {boolean} whether a drag started
+   */
+  startMove(p) {
+    const id = this.selection.a;
+    if (id === null || this.following) return false;
+    const r = this.model.table.get(this.cur, id);
+    if (!isFollowed(r) || this.stage.hit(this.model.table, this.cur, p) !== id) return false;
+    this.moving = { id, from: p, dx: 0, dy: 0 };
+    return true;
+  }
+
+  /** Ends a drag: a shape moved by a pixel or more becomes the track's keyframe here. */
+  async endMove() {
+    const m = this.moving;
+    this.moving = null;
+    this.render();
+    if (!m || (Math.abs(m.dx) < 1 && Math.abs(m.dy) < 1)) return;
+    const r = this.model.table.get(this.cur, m.id);
+    const bm = r ? this.stage.mask(r)?.bitmap : null;
+    if (!bm) return;
+    await this.shapeGiven(shiftBitmap(bm, m.dx, m.dy, this.stage.width, this.stage.height));
   }
 
   /**
@@ -926,6 +970,22 @@ export class App {
     const busy = this.playing;
     this.stage.drawOverlay({ table, gt: this.gt, frame: this.cur, selection: this.selection, options: this.options, labels: this.labels });
     this.stage.drawTool(this.shapeTool);
+    const mv = this.moving;
+    const moved = mv && table.get(this.cur, mv.id);
+    if (mv && moved) {
+      // The dragged shape's box where it would land.
+      const b = moved.bbox;
+      this.stage.drawTool({
+        draw(ctx, lw) {
+          ctx.save();
+          ctx.strokeStyle = '#ffffff';
+          ctx.lineWidth = lw;
+          ctx.setLineDash([lw * 4, lw * 3]);
+          ctx.strokeRect(b.x + mv.dx, b.y + mv.dy, b.w, b.h);
+          ctx.restore();
+        },
+      });
+    }
     this.timeline.render({ table, frames: this.lastFrame, frame: this.cur, selection: this.selection, busy });
     this.panel.render({
       table,
@@ -1049,13 +1109,29 @@ export class App {
         this.shapeTool.down(this.stage.toImage(e), this.stage.screenScale());
         return;
       }
-      const id = this.stage.hit(this.model.table, this.cur, this.stage.toImage(e));
+      const p = this.stage.toImage(e);
+      // Dragging the selected track's followed shape moves it (a corrected keyframe).
+      if (!e.shiftKey && this.startMove(p)) {
+        overlay.setPointerCapture?.(e.pointerId);
+        return;
+      }
+      const id = this.stage.hit(this.model.table, this.cur, p);
       if (id === null) {
         if (!e.shiftKey) this.deselect();
       } else this.select(id, e.shiftKey);
     });
-    overlay.addEventListener('pointermove', (e) => this.shapeTool.move(this.stage.toImage(e)));
-    overlay.addEventListener('pointerup', (e) => this.shapeTool.up(this.stage.toImage(e)));
+    overlay.addEventListener('pointermove', (e) => {
+      const p = this.stage.toImage(e);
+      if (this.moving) {
+        this.moving.dx = p.x - this.moving.from.x;
+        this.moving.dy = p.y - this.moving.from.y;
+        this.render();
+      } else this.shapeTool.move(p);
+    });
+    overlay.addEventListener('pointerup', (e) => {
+      if (this.moving) void this.refusable(() => this.endMove());
+      else this.shapeTool.up(this.stage.toImage(e));
+    });
     overlay.addEventListener('dblclick', () => this.shapeTool.close());
     click('fol-box', () => this.useTool('box'));
     click('fol-poly', () => this.useTool('polygon'));

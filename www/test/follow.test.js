@@ -14,6 +14,7 @@ import {
   followedRun,
   followedSpans,
   rasterize,
+  shiftBitmap,
   stepRecord,
 } from '../src/model/follow.js';
 
@@ -186,4 +187,15 @@ test('boxes and polygons rasterise to the pixels they cover', () => {
   assert.deepEqual(bitmapBox(tri, 12), { x: 0, y: 0, w: 9, h: 9 });
   // Fewer than three points cover nothing.
   assert.equal(bitmapBox(rasterize({ kind: 'polygon', points: [[0, 0], [5, 5]] }, 8, 8), 8), null);
+});
+
+test('a dragged mask moves by whole pixels and is cut at the frame edge', () => {
+  const bm = { x: 1, y: 1, width: 2, height: 2, data: [1, 1, 0, 1] };
+  const moved = shiftBitmap(bm, 2.4, 1, 6, 5);
+  assert.deepEqual(bitmapBox(moved, 6), { x: 3, y: 2, w: 2, h: 2 });
+  assert.equal(moved.reduce((a, b) => a + b, 0), 3);
+  // Half outside: only the pixel still in the frame stays.
+  const cut = shiftBitmap(bm, 4, 3, 6, 5);
+  assert.equal(cut.reduce((a, b) => a + b, 0), 1);
+  assert.equal(cut[4 * 6 + 5], 1);
 });

@@ -245,6 +245,32 @@ export function rasterize(shape, width, height) {
 }
 
 /**
+ * A mask bitmap cropped to its foreground (the core's `decodeMask`) moved by `(dx, dy)` whole
+ * pixels, as a full-frame bitmap (`width·height` bytes); what leaves the frame is cut off. A
+ * labeller who drags a followed shape gives this as the corrected keyframe.
+ * @param {{ x: number, y: number, width: number, height: number, data: ArrayLike<number> }} bm
+ * @param {number} dx
+ * @param {number} dy
+ * @param {number} width
+ * @param {number} height
+ * @returns {Uint8Array}
+ */
+export function shiftBitmap(bm, dx, dy, width, height) {
+  const out = new Uint8Array(width * height);
+  const ox = bm.x + Math.round(dx);
+  const oy = bm.y + Math.round(dy);
+  for (let r = 0; r < bm.height; r++) {
+    const y = oy + r;
+    if (y < 0 || y >= height) continue;
+    for (let c = 0; c < bm.width; c++) {
+      const x = ox + c;
+      if (x >= 0 && x < width && bm.data[r * bm.width + c]) out[y * width + x] = 1;
+    }
+  }
+  return out;
+}
+
+/**
  * The bounding box of a shape's foreground pixels in a bitmap (null: none).
  * @param {Uint8Array} bitmap
  * @param {number} width
