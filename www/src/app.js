@@ -800,7 +800,17 @@ export class App {
           }
           const p = inflight.shift();
           if (!p) break;
-          const { step } = await p;
+          /** @type {{ step: import('./worker/protocol.js').FollowStep }} */
+          let answer;
+          try {
+            answer = await p;
+          } catch (e) {
+            // The frame still in flight fails or lands after this one: wait for it, so no
+            // rejection is left unhandled, then report this one.
+            await Promise.allSettled(inflight);
+            throw e;
+          }
+          const { step } = answer;
           if (legStopped) continue;
           const r = stepRecord(id, step);
           if (!r) {
