@@ -377,6 +377,79 @@ test('an image sequence: a polygon followed both ways through page-supplied fram
   assert.deepEqual(errors, []);
 });
 
+// A video file: the page seeks the <video> to each frame, forward and then backward. A red
+// square crosses a textured background (3.6 px a frame); a box drawn around it on frame 1 is
+// followed 15 frames on, then the followed shape on frame 16 is followed 15 frames back.
+test('a video file: a box followed forward, then backward through seeks', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  await page.evaluate(async () => {
+    const c = document.createElement('canvas');
+    c.width = 320;
+    c.height = 240;
+    const ctx = /** @type {CanvasRenderingContext2D} */ (c.getContext('2d'));
+    const rec = new MediaRecorder(c.captureStream(25), { mimeType: 'video/webm' });
+    /** @type {Blob[]} */
+    const parts = [];
+    rec.ondataavailable = (e) => parts.push(e.data);
+    const stopped = new Promise((r) => (rec.onstop = r));
+    rec.start();
+    const t0 = performance.now();
+    await new Promise((resolve) => {
+      const draw = () => {
+        const t = (performance.now() - t0) / 1000;
+        for (let y = 0; y < 240; y += 20)
+          for (let x = 0; x < 320; x += 20) {
+            ctx.fillStyle = (x + y) % 40 ? '#334' : '#445';
+            ctx.fillRect(x, y, 20, 20);
+          }
+        ctx.fillStyle = '#f44';
+        ctx.fillRect(20 + 90 * t, 60, 40, 40);
+        if (t < 2) requestAnimationFrame(draw);
+        else resolve(undefined);
+      };
+      draw();
+    });
+    rec.stop();
+    await stopped;
+    await /** @type {any} */ (window).__shapetrack.app.openVideo(new File(parts, 'square.webm', { type: 'video/webm' }));
+  });
+  const st = await untilState(page, (s) => s.source?.kind === 'video' && s.processed >= 1 && !s.playing);
+  assert.ok(st.frames >= 20, `${st.frames} frames`);
+  await page.fill('#fol-len', '15');
+  await page.evaluate(() => /** @type {HTMLElement} */ (document.activeElement)?.blur());
+  await page.keyboard.press('x');
+  await dragBox(page, { x: 12, y: 52 }, { x: 72, y: 108 });
+  const fwd = await untilState(page, (s) => !s.following && /15 frames followed from frame 1/.test(s.status), 120_000);
+  const id = fwd.selection.a;
+  const ahead = await trackRecords(page, id);
+  assert.deepEqual(ahead.map((/** @type {any} */ r) => r.frame), Array.from({ length: 16 }, (_, i) => i + 1));
+  const cx = (/** @type {any} */ r) => r.bbox.x + r.bbox.w / 2;
+  // The square moved right about 54 px; the followed shape with it.
+  const moved = cx(ahead[15]) - cx(ahead[0]);
+  console.log(`video: the followed box moved ${moved.toFixed(1)} px right over 15 frames (the square: ~54)`);
+  assert.ok(moved > 25, `followed box moved ${moved} px`);
+
+  // Backward from frame 16: the same track, its shape there as the start; the follow stops
+  // before the keyframe on frame 1 (a shape the labeller gave is never overwritten).
+  await page.keyboard.press('Escape'); // the box tool off
+  await page.selectOption('#fol-dir', 'backward');
+  await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.seek(16));
+  await untilState(page, (s) => s.frame === 16 && s.tool === null && s.selection.a === id);
+  await page.keyboard.press('f');
+  await untilState(page, (s) => !s.following && /14 frames followed from frame 16/.test(s.status), 120_000);
+  const back = await trackRecords(page, id);
+  assert.deepEqual(back.map((/** @type {any} */ r) => r.frame), Array.from({ length: 16 }, (_, i) => i + 1));
+  assert.deepEqual(back.filter((/** @type {any} */ r) => r.keyframe).map((/** @type {any} */ r) => r.frame), [1, 16]);
+  // Frames 2..15 were followed again, backward (seeking the video back frame by frame).
+  const backMoved = cx(back[15]) - cx(back[1]);
+  console.log(`video, backward from frame 16: the box on frame 2 is ${backMoved.toFixed(1)} px left of frame 16's`);
+  assert.ok(backMoved > 25, `followed back ${backMoved} px`);
+  assert.deepEqual(errors, []);
+});
+
 test('no request left localhost', () => {
   assert.ok(app.browser.requests.length > 0);
   assert.deepEqual(app.browser.foreign, []);

@@ -14,6 +14,7 @@ import {
   commitFollow,
   correctionLeg,
   followLegs,
+  clipLegs,
   followedRun,
   isFollowed,
   rasterize,
@@ -634,7 +635,8 @@ export class App {
     if (!r) throw new FollowError(`track ${id} has no shape in frame ${this.cur}: go to a frame where it is seen, or draw one (X, P)`);
     // A box-only record (a box detector, an import) starts from its filled box.
     const key = r.mask ? r : { ...r, mask: this.core.encodeMask(this.stage.width, this.stage.height, rasterize({ kind: 'box', box: r.bbox }, this.stage.width, this.stage.height)) };
-    await this.followFrom(id, key, followLegs({ frame: this.cur, frames: this.session.frames, ...this.followSettings() }));
+    const legs = followLegs({ frame: this.cur, frames: this.session.frames, ...this.followSettings() });
+    await this.followFrom(id, key, clipLegs(this.model.table, id, legs));
   }
 
   /**
@@ -675,7 +677,8 @@ export class App {
       this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
       this.status(`track ${sel}: shape corrected in frame ${frame}`);
     } else {
-      await this.followFrom(sel, key, followLegs({ frame, frames: this.session.frames, ...this.followSettings() }));
+      const legs = followLegs({ frame, frames: this.session.frames, ...this.followSettings() });
+      await this.followFrom(sel, key, clipLegs(this.model.table, sel, legs));
     }
   }
 

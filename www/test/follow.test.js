@@ -8,6 +8,7 @@ import {
   bitmapBox,
   checkFrame,
   checkShape,
+  clipLegs,
   commitFollow,
   correctionLeg,
   followLegs,
@@ -198,4 +199,18 @@ test('a dragged mask moves by whole pixels and is cut at the frame edge', () => 
   const cut = shiftBitmap(bm, 4, 3, 6, 5);
   assert.equal(cut.reduce((a, b) => a + b, 0), 1);
   assert.equal(cut[4 * 6 + 5], 1);
+});
+
+test('a new follow of a track stops before its keyframes: no propagation overwrites a given shape', () => {
+  const m = new EditModel(new TrackTable());
+  follow(m, 1, rec(5, 1), followLegs({ frame: 5, frames: 30, direction: 'forward', length: 10 }), 1);
+  // From frame 15 back 15 frames: frames 14..6, not the keyframe at 5 nor what lies before it.
+  assert.deepEqual(clipLegs(m.table, 1, followLegs({ frame: 15, frames: 30, direction: 'both', length: 15 })), [
+    { direction: 1, from: 15, to: 30 },
+    { direction: -1, from: 15, to: 6 },
+  ]);
+  // Right next to a keyframe, in its direction: nothing to do, said so.
+  assert.throws(() => clipLegs(m.table, 1, [{ direction: -1, from: 6, to: 1 }]), /keyframe/);
+  // Another track's keyframes do not matter.
+  assert.deepEqual(clipLegs(m.table, 2, [{ direction: -1, from: 6, to: 1 }]), [{ direction: -1, from: 6, to: 1 }]);
 });

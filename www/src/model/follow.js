@@ -90,6 +90,32 @@ export function followLegs({ frame, frames, direction, length }) {
 }
 
 /**
+ * Legs of a follow of track `id` cut short before the track's keyframes: a keyframe is a shape
+ * the labeller gave, and no propagation overwrites it (a correction stops there the same way).
+ * @param {TrackTable} table
+ * @param {number} id
+ * @param {Leg[]} legs
+ * @returns {Leg[]} the legs that still cover a frame
+ * @throws {FollowError} when none does
+ */
+export function clipLegs(table, id, legs) {
+  /** @type {Leg[]} */
+  const out = [];
+  for (const leg of legs) {
+    let to = leg.from;
+    for (let f = leg.from + leg.direction; leg.direction > 0 ? f <= leg.to : f >= leg.to; f += leg.direction) {
+      if (table.get(f, id)?.keyframe) break;
+      to = f;
+    }
+    if (to !== leg.from) out.push({ ...leg, to });
+  }
+  if (!out.length && legs.length) {
+    throw new FollowError(`track ${id} has a keyframe next to frame ${legs[0].from} in that direction: nothing to follow before it`);
+  }
+  return out;
+}
+
+/**
  * The run of followed records of track `id` around `frame`: the consecutive frames whose
  * records the follower made (keyframes included), and the keyframes in it.
  * @param {TrackTable} table
