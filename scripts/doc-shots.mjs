@@ -9,7 +9,7 @@ import { copyFileSync, mkdirSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { ROOT, SHOTS } from '../tests/e2e/harness.mjs';
 
-const tests = ['tests/e2e/labelling.test.mjs', 'tests/e2e/relink.test.mjs', 'tests/e2e/timeline.test.mjs'];
+const tests = ['tests/e2e/labelling.test.mjs', 'tests/e2e/relink.test.mjs', 'tests/e2e/timeline.test.mjs', 'tests/e2e/follow.test.mjs'];
 const run = spawnSync(process.execPath, ['--test', '--test-concurrency=1', ...tests], { cwd: ROOT, stdio: 'inherit' });
 if (run.status !== 0) process.exit(run.status ?? 1);
 const dest = join(ROOT, 'www', 'docs');

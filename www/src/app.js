@@ -7,6 +7,21 @@ import { runCommand, renumber, validSelection } from './model/commands.js';
 import { Session } from './model/session.js';
 import { Scorer, scoreInputs } from './model/scoring.js';
 import { TrackTable } from './model/tracks.js';
+import {
+  FollowError,
+  bitmapBox,
+  checkShape,
+  commitFollow,
+  correctionLeg,
+  followLegs,
+  clipLegs,
+  followedRun,
+  isFollowed,
+  rasterize,
+  shiftBitmap,
+  stepRecord,
+} from './model/follow.js';
+import { ShapeTool } from './view/shapetool.js';
 import { Stage } from './view/stage.js';
 import { Timeline } from './view/timeline.js';
 import { Panel } from './view/panel.js';
@@ -113,6 +128,13 @@ export class App {
       // The renumbered track stays selected under its new id.
       onRenumber: (to) => this.edit(() => renumber(this.model, this.selection, to)),
     }, colour);
+    /** Draws a box or polygon to follow on the stage. */
+    this.shapeTool = new ShapeTool(
+      (shape) => {
+        void this.refusable(() => this.shapeDrawn(shape));
+      },
+      () => this.render(),
+    );
     this.model.subscribe(() => {
       this.validateSelection();
       if (this.gt) this.scorer.request();
@@ -194,9 +216,15 @@ export class App {
     return this.session.frames || Math.max(this.session.processed, this.model.table.lastFrame());
   }
 
-  /** The last frame a seek may show (see `Session.lastShown`); play (or →) tracks on from there. */
+  /**
+   * The last frame a seek may show (see `Session.lastShown`); play (or →) tracks on from there.
+   * Frames a follow reached ahead of the tracker can be shown too, except from the webcam
+   * (whose old frames are gone).
+   */
   get lastShown() {
-    return this.session.lastShown(this.lastFrame);
+    const shown = this.session.lastShown(this.lastFrame);
+    if (!this.source || this.source.kind === 'webcam') return shown;
+    return Math.max(shown, Math.min(this.lastFrame, this.model.table.lastFrame()));
   }
 
   async togglePlay() {
@@ -566,6 +594,258 @@ export class App {
     }
   }
 
+  // ---------------------------------------------------------------- follow a shape
+
+  /**
+   * The follow under way (null: none): Cancel sets `cancel`, and the loop stops asking for
+   * frames.
+   * @type {{ cancel: boolean } | null}
+   */
+  following = null;
+
+  /**
+   * Switches the drawing tool (the same one again: off, clicks select again).
+   * @param {'box' | 'polygon' | null} mode
+   */
+  useTool(mode) {
+    const next = mode === this.shapeTool.mode ? null : mode;
+    this.shapeTool.use(next);
+    byId('fol-box').setAttribute('aria-pressed', String(next === 'box'));
+    byId('fol-poly').setAttribute('aria-pressed', String(next === 'polygon'));
+    byId('overlay').classList.toggle('drawing', next !== null);
+    if (next) {
+      const what = next === 'box' ? 'drag a box' : 'click the corners of a polygon (Enter or double-click closes it)';
+      const on = this.selection.a !== null ? `: it becomes track ${this.selection.a}'s shape here (Esc first for a new track)` : ' around the object to follow';
+      this.status(`${what}${on}`);
+    }
+  }
+
+  /** The frames a new follow covers, from the Follow card's settings. */
+  followSettings() {
+    const direction = /** @type {'forward' | 'backward' | 'both'} */ (byId('fol-dir', HTMLSelectElement).value);
+    const length = Number(byId('fol-len', HTMLInputElement).value);
+    return { direction, length };
+  }
+
+  /** Follows the selected track's shape in this frame (F). */
+  async followSelected() {
+    const id = this.selection.a;
+    if (id === null) throw new FollowError('select a shape to follow (click it), or draw a box or polygon around the object (X, P)');
+    const r = this.model.table.get(this.cur, id);
+    if (!r) throw new FollowError(`track ${id} has no shape in frame ${this.cur}: go to a frame where it is seen, or draw one (X, P)`);
+    // A box-only record (a box detector, an import) starts from its filled box.
+    const key = r.mask ? r : { ...r, mask: this.core.encodeMask(this.stage.width, this.stage.height, rasterize({ kind: 'box', box: r.bbox }, this.stage.width, this.stage.height)) };
+    const legs = followLegs({ frame: this.cur, frames: this.session.frames, ...this.followSettings() });
+    await this.followFrom(id, key, clipLegs(this.model.table, id, legs));
+  }
+
+  /**
+   * A box or polygon drawn on the stage (see `shapeGiven`).
+   * @param {import('./view/shapetool.js').Shape} shape
+   */
+  async shapeDrawn(shape) {
+    const { width, height } = this.stage;
+    await this.shapeGiven(rasterize(shape, width, height));
+  }
+
+  /**
+   * A shape the labeller gave on this frame (drawn, or a followed shape dragged), as a
+   * full-frame bitmap: with a followed track selected and this frame inside its followed run,
+   * a corrected keyframe that re-propagates the frames it affects; with another track
+   * selected, that track followed from the shape; else a new track.
+   * @param {Uint8Array} bitmap
+   */
+  async shapeGiven(bitmap) {
+    const { width, height } = this.stage;
+    const bbox = bitmapBox(bitmap, width) ?? { x: 0, y: 0, w: 0, h: 0 };
+    checkShape({ bbox });
+    const mask = this.core.encodeMask(width, height, bitmap);
+    const frame = this.cur;
+    const sel = this.selection.a;
+    if (sel === null) {
+      const id = this.model.nextId;
+      await this.followFrom(id, { frame, id, bbox, mask }, followLegs({ frame, frames: this.session.frames, ...this.followSettings() }));
+      return;
+    }
+    const key = { frame, id: sel, bbox, mask };
+    const leg = correctionLeg(this.model.table, sel, frame);
+    if (leg) {
+      await this.followFrom(sel, key, [leg], `correct ${sel} at frame ${frame}`);
+    } else if (followedRun(this.model.table, sel, frame)) {
+      // The run's last frame: nothing after it to propagate, the shape alone is corrected.
+      commitFollow(this.model, { id: sel, key, legs: [], records: [], label: `correct ${sel} at frame ${frame}` });
+      this.lastEdit = this.model.undoStack.at(-1)?.label ?? '';
+      this.status(`track ${sel}: shape corrected in frame ${frame}`);
+    } else {
+      const legs = followLegs({ frame, frames: this.session.frames, ...this.followSettings() });
+      await this.followFrom(sel, key, clipLegs(this.model.table, sel, legs));
+    }
+  }
+
+  /**
+   * A drag of the selected track's followed shape (no drawing tool): where it started, and how
+   * far it has gone (image pixels). Released, the moved shape is a corrected keyframe.
+   * @type {{ id: number, from: { x: number, y: number }, dx: number, dy: number } | null}
+   */
+  moving = null;
+
+  /**
+   * Starts dragging the shape under `p` when it is the selected track's followed shape.
+   * @param {{ x: number, y: number }} p
+   * @returns {boolean} whether a drag started
+   */
+  startMove(p) {
+    const id = this.selection.a;
+    if (id === null || this.following) return false;
+    const r = this.model.table.get(this.cur, id);
+    if (!isFollowed(r) || this.stage.hit(this.model.table, this.cur, p) !== id) return false;
+    this.moving = { id, from: p, dx: 0, dy: 0 };
+    return true;
+  }
+
+  /** Ends a drag: a shape moved by a pixel or more becomes the track's keyframe here. */
+  async endMove() {
+    const m = this.moving;
+    this.moving = null;
+    this.render();
+    if (!m || (Math.abs(m.dx) < 1 && Math.abs(m.dy) < 1)) return;
+    const r = this.model.table.get(this.cur, m.id);
+    const bm = r ? this.stage.mask(r)?.bitmap : null;
+    if (!bm) return;
+    await this.shapeGiven(shiftBitmap(bm, m.dx, m.dy, this.stage.width, this.stage.height));
+  }
+
+  /**
+   * Runs a follow, reporting a refusal (an `EditError`: an empty shape, no selection, a frame
+   * outside the video) in the status line; anything else fails as usual.
+   * @param {() => Promise<void>} fn
+   */
+  async refusable(fn) {
+    try {
+      await fn();
+    } catch (e) {
+      if (e instanceof EditError) this.status(e.message, true);
+      else this.fail(e);
+    }
+  }
+
+  /** Stops the follow under way after the frame in progress; what it followed is kept. */
+  cancelFollow() {
+    if (this.following) this.following.cancel = true;
+  }
+
+  /**
+   * A frame's pixels for the follower: none for the synthetic scene (the worker renders it),
+   * else the source's bitmap (grabbed in turn with the tracker's frames: one <video> seeks to
+   * one place at a time).
+   * @param {AnySource} src
+   * @param {number} n
+   * @returns {Promise<ImageBitmap | undefined>}
+   */
+  grab(src, n) {
+    if (src.kind === 'synth') return Promise.resolve(undefined);
+    const grabbed = this.grabChain.then(() => src.frameAt(n));
+    this.grabChain = grabbed.then(
+      () => undefined,
+      () => undefined,
+    );
+    return grabbed.then((b) => {
+      if (!b) throw new FollowError(`frame ${n} is not available from ${src.name}`);
+      return b;
+    });
+  }
+
+  /**
+   * Follows track `id` from the shape `key` along `legs` (the worker's follower, a frame at a
+   * time, two frames in flight), with progress and Cancel, then applies the result as one
+   * edit (undoable). A cancelled follow keeps what it reached and leaves later frames as they
+   * were; an error changes nothing.
+   * @param {number} id
+   * @param {TrackRecord} key the keyframe (its mask is what is followed)
+   * @param {import('./model/follow.js').Leg[]} legs
+   * @param {string} [label] the edit's name
+   */
+  async followFrom(id, key, legs, label = `follow ${id} from frame ${key.frame}`) {
+    if (this.following) throw new FollowError('a follow is under way: wait for it or cancel it (Esc)');
+    const src = this.source;
+    if (!src || !key.mask) throw new FollowError('open the demo, a video or an image sequence first');
+    checkShape(key);
+    await this.stop();
+    const run = { cancel: false };
+    this.following = run;
+    const progress = byId('fol-progress', HTMLProgressElement);
+    const cancel = byId('fol-cancel');
+    progress.hidden = false;
+    progress.value = 0;
+    cancel.hidden = false;
+    const total = legs.reduce((n, l) => n + Math.abs(l.to - l.from), 0);
+    /** @type {TrackRecord[]} */
+    const records = [];
+    /** @type {import('./model/follow.js').Leg[]} the frames each leg actually covered */
+    const reached = [];
+    let done = 0;
+    let stopped = false;
+    try {
+      for (const leg of legs) {
+        if (run.cancel) break;
+        await this.worker.followStart(leg.from, leg.to, key.mask, await this.grab(src, leg.from));
+        let last = leg.from;
+        /** @type {Array<Promise<{ step: import('./worker/protocol.js').FollowStep }>>} */
+        const inflight = [];
+        let n = leg.from + leg.direction;
+        const inLeg = (/** @type {number} */ f) => (leg.direction > 0 ? f <= leg.to : f >= leg.to);
+        let legStopped = false;
+        while (true) {
+          while (!run.cancel && !legStopped && inflight.length < 2 && inLeg(n)) {
+            const f = n;
+            inflight.push(this.grab(src, f).then((b) => this.worker.followStep(f, b)));
+            n += leg.direction;
+          }
+          const p = inflight.shift();
+          if (!p) break;
+          /** @type {{ step: import('./worker/protocol.js').FollowStep }} */
+          let answer;
+          try {
+            answer = await p;
+          } catch (e) {
+            // The frame still in flight fails or lands after this one: wait for it, so no
+            // rejection is left unhandled, then report this one.
+            await Promise.allSettled(inflight);
+            throw e;
+          }
+          const { step } = answer;
+          if (legStopped) continue;
+          const r = stepRecord(id, step);
+          if (!r) {
+            legStopped = true;
+            stopped = true;
+            last = leg.to;
+            continue;
+          }
+          records.push(r);
+          last = step.frame;
+          done++;
+          progress.value = total ? done / total : 1;
+          this.status(`following ${id}: frame ${step.frame} (${done}/${total})${run.cancel ? ', stopping…' : ''}`);
+        }
+        // A follower that gave up has said where its target is not: the old followed shapes
+        // of the rest of the leg go too. A cancelled leg leaves them.
+        reached.push({ ...leg, to: last });
+      }
+    } finally {
+      this.following = null;
+      progress.hidden = true;
+      cancel.hidden = true;
+      await this.worker.followEnd().catch(() => undefined);
+    }
+    commitFollow(this.model, { id, key, legs: reached, records, label });
+    this.lastEdit = label;
+    this.selection = { a: id, b: null };
+    const how = run.cancel ? ' (cancelled)' : stopped ? ' (the follower lost the target and stopped)' : '';
+    this.status(`track ${id}: ${records.length} frame${records.length === 1 ? '' : 's'} followed from frame ${key.frame}${how}`);
+    this.render();
+  }
+
   // ---------------------------------------------------------------- files
 
   /**
@@ -702,6 +982,23 @@ export class App {
     // frame) refresh a few times a second; the overlay and playhead every frame.
     const busy = this.playing;
     this.stage.drawOverlay({ table, gt: this.gt, frame: this.cur, selection: this.selection, options: this.options, labels: this.labels });
+    this.stage.drawTool(this.shapeTool);
+    const mv = this.moving;
+    const moved = mv && table.get(this.cur, mv.id);
+    if (mv && moved) {
+      // The dragged shape's box where it would land.
+      const b = moved.bbox;
+      this.stage.drawTool({
+        draw(ctx, lw) {
+          ctx.save();
+          ctx.strokeStyle = '#ffffff';
+          ctx.lineWidth = lw;
+          ctx.setLineDash([lw * 4, lw * 3]);
+          ctx.strokeRect(b.x + mv.dx, b.y + mv.dy, b.w, b.h);
+          ctx.restore();
+        },
+      });
+    }
     this.timeline.render({ table, frames: this.lastFrame, frame: this.cur, selection: this.selection, busy });
     this.panel.render({
       table,
@@ -819,11 +1116,40 @@ export class App {
     }
     const overlay = byId('overlay', HTMLCanvasElement);
     overlay.addEventListener('pointerdown', (e) => {
-      const id = this.stage.hit(this.model.table, this.cur, this.stage.toImage(e));
+      if (this.shapeTool.mode) {
+        // A box drag keeps the pointer even when it leaves the canvas.
+        overlay.setPointerCapture?.(e.pointerId);
+        this.shapeTool.down(this.stage.toImage(e), this.stage.screenScale());
+        return;
+      }
+      const p = this.stage.toImage(e);
+      // Dragging the selected track's followed shape moves it (a corrected keyframe).
+      if (!e.shiftKey && this.startMove(p)) {
+        overlay.setPointerCapture?.(e.pointerId);
+        return;
+      }
+      const id = this.stage.hit(this.model.table, this.cur, p);
       if (id === null) {
         if (!e.shiftKey) this.deselect();
       } else this.select(id, e.shiftKey);
     });
+    overlay.addEventListener('pointermove', (e) => {
+      const p = this.stage.toImage(e);
+      if (this.moving) {
+        this.moving.dx = p.x - this.moving.from.x;
+        this.moving.dy = p.y - this.moving.from.y;
+        this.render();
+      } else this.shapeTool.move(p);
+    });
+    overlay.addEventListener('pointerup', (e) => {
+      if (this.moving) void this.refusable(() => this.endMove());
+      else this.shapeTool.up(this.stage.toImage(e));
+    });
+    overlay.addEventListener('dblclick', () => this.shapeTool.close());
+    click('fol-box', () => this.useTool('box'));
+    click('fol-poly', () => this.useTool('polygon'));
+    click('fol-go', () => this.refusable(() => this.followSelected()));
+    click('fol-cancel', () => this.cancelFollow());
     // Drop a video, images or an annotation file anywhere on the stage.
     const stage = byId('stage');
     stage.addEventListener('dragover', (e) => {
@@ -902,7 +1228,19 @@ export class App {
       case 'redo':
         return this.action(a);
       case 'deselect':
+        // Esc stops what is under way first: a follow, a shape being drawn, the drawing tool.
+        if (this.following) return this.cancelFollow();
+        if (this.shapeTool.drawing) return this.shapeTool.reset();
+        if (this.shapeTool.mode) return this.useTool(null);
         return this.deselect();
+      case 'follow':
+        return this.refusable(() => this.followSelected());
+      case 'drawBox':
+        return this.useTool('box');
+      case 'drawPolygon':
+        return this.useTool('polygon');
+      case 'closeShape':
+        return this.shapeTool.close();
       case 'prevTrack':
         return this.cycleTrack(-1);
       case 'nextTrack':

@@ -40,6 +40,9 @@ async function main() {
     // no shortcut reaches the player behind it.
     if (document.querySelector('dialog[open]')) return;
     if (typing(e) && e.key !== 'Escape') return;
+    // Enter on a focused button or link activates it, as usual; elsewhere it closes a polygon.
+    const t = /** @type {HTMLElement | null} */ (e.target);
+    if (e.key === 'Enter' && t?.closest?.('button, a, summary')) return;
     const a = actionFor(e);
     if (!a) return;
     e.preventDefault();
@@ -91,6 +94,8 @@ function exposeForTests(app) {
       selection: app.selection,
       scores: app.scores,
       canUndo: app.model.canUndo,
+      following: app.following !== null,
+      tool: app.shapeTool.mode,
       status: byId('status').textContent,
     }),
     /** Every record as the table holds it (frame, id, bbox, ...). */

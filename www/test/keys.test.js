@@ -28,6 +28,7 @@ test('every shortcut is reachable: no binding is shadowed by an earlier one', ()
     prevTrack: { key: '[' }, nextTrack: { key: ']' }, masks: { key: 'k' }, boxes: { key: 'b' },
     trails: { key: 't' }, gt: { key: 'g' }, demo: { key: 'd' }, open: { key: 'o' },
     import: { key: 'i' }, export: { key: 'e' }, help: { key: '?', shiftKey: true },
+    follow: { key: 'f' }, drawBox: { key: 'x' }, drawPolygon: { key: 'p' }, closeShape: { key: 'Enter' },
   };
   assert.equal(Object.keys(probes).length, SHORTCUTS.length);
   for (const [action, e] of Object.entries(probes)) assert.equal(actionFor(e), action, action);

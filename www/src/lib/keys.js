@@ -5,7 +5,7 @@
  * @typedef {'play' | 'back' | 'fwd' | 'back10' | 'fwd10' | 'first' | 'last' | 'merge' | 'swap'
  *   | 'split' | 'renumber' | 'delete' | 'deleteRecord' | 'undo' | 'redo' | 'deselect'
  *   | 'prevTrack' | 'nextTrack' | 'masks' | 'boxes' | 'trails' | 'gt' | 'help' | 'demo'
- *   | 'open' | 'import' | 'export'} Action
+ *   | 'open' | 'import' | 'export' | 'follow' | 'drawBox' | 'drawPolygon' | 'closeShape'} Action
  *
  * @typedef {{ key: string, ctrlKey?: boolean, metaKey?: boolean, shiftKey?: boolean, altKey?: boolean }} KeyLike
  */
@@ -54,6 +54,10 @@ bind('D', 'demo', 'start the demo scene', plain('d'));
 bind('O', 'open', 'open a video', plain('o'));
 bind('I', 'import', 'import tracks', plain('i'));
 bind('E', 'export', 'export tracks', plain('e'));
+bind('F', 'follow', 'follow the selected shape from this frame', plain('f'));
+bind('X', 'drawBox', 'draw a box to follow (or to correct the selected followed track here)', plain('x'));
+bind('P', 'drawPolygon', 'draw a polygon to follow: click its corners', plain('p'));
+bind('Enter', 'closeShape', 'close the polygon being drawn', (e) => !mod(e) && e.key === 'Enter');
 bind('?', 'help', 'this help and the legend of the marks', (e) => e.key === '?');
 
 /**

@@ -164,7 +164,11 @@ export class EditModel {
       }
       const id = this.resolve(r.id);
       if (id === null) continue;
-      if (this.table.get(frame, id)) {
+      const there = this.table.get(frame, id);
+      // The labeller followed this track through this frame (model/follow.js): the shape they
+      // asked for stands, the tracker's later view of the same track does not replace it.
+      if (there?.source === 'follow') continue;
+      if (there) {
         // Two tracker tracks the labeller declared one object (a merge of fragments, a
         // renumbering onto another's id) are both seen in this frame: they are two objects
         // after all. Hiding one would lose a label without a word, so this one continues

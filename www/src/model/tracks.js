@@ -10,8 +10,9 @@
  * @typedef {{
  *   frame: number, id: number, bbox: Box, score?: number, class?: number,
  *   visibility?: number, mask?: Rle, interpolated?: boolean, occluded?: boolean,
- *   state?: string,
- * }} TrackRecord
+ *   state?: string, source?: string, keyframe?: boolean,
+ * }} TrackRecord  `source: 'follow'`: made by the follower (model/follow.js); `keyframe`: a
+ *   shape the labeller gave a follow
  */
 
 export class TrackTable {

@@ -165,7 +165,7 @@ export class Stage {
         ctx.setLineDash([]);
       }
       const name = r.class !== undefined && r.class >= 0 ? labels.find((l) => l.class === r.class)?.name : undefined;
-      const label = `${r.id}${r.interpolated ? '*' : ''}${name ? ` ${name}` : ''}`;
+      const label = `${r.id}${r.interpolated ? '*' : ''}${r.keyframe ? '◆' : ''}${name ? ` ${name}` : ''}`;
       const pad = (3 * dpr) / k;
       const tw = ctx.measureText(label).width + 2 * pad;
       const th = font + 2 * pad;
@@ -207,6 +207,23 @@ export class Stage {
       ctx.stroke();
     }
     ctx.globalAlpha = 1;
+  }
+
+  /**
+   * Draws a drawing tool's preview (a box or polygon being drawn) over the overlay, after
+   * `drawOverlay`.
+   * @param {{ draw(ctx: CanvasRenderingContext2D, lineWidth: number): void }} tool
+   */
+  drawTool(tool) {
+    const k = this.overlay.width / this.width;
+    const dpr = globalThis.devicePixelRatio || 1;
+    this.octx.setTransform(k, 0, 0, k, 0, 0);
+    tool.draw(this.octx, (1.5 * dpr) / k);
+  }
+
+  /** Screen pixels per image pixel on the overlay. */
+  screenScale() {
+    return this.overlay.getBoundingClientRect().width / this.width || 1;
   }
 
   /**

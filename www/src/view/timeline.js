@@ -3,7 +3,8 @@
 // broken rows, identity switches as bars that stop where another starts. Click a row to select
 // the track and jump to that frame; shift-click adds a second track (merge, swap). Spans the
 // offline pass filled in (interpolated shapes) are hatched, so what was seen and what was
-// inferred stay apart.
+// inferred stay apart. Spans a follow made (model/follow.js) carry a white band along the
+// row's foot, and each keyframe (a shape the labeller gave) a white tick across the row.
 //
 // A labelling session can hold a thousand tracks over thousands of frames, so the timeline is a
 // window onto the barcode (lib/viewport.js): rows stay tall enough to carry their id and scroll
@@ -14,6 +15,7 @@
 
 import { colorOf } from '../lib/colors.js';
 import { Viewport } from '../lib/viewport.js';
+import { followedSpans } from '../model/follow.js';
 
 /**
  * @typedef {import('../model/tracks.js').TrackTable} TrackTable
@@ -173,8 +175,9 @@ export class Timeline {
       return;
     }
     const { id, frame } = this.locate(e);
-    const filled = id !== null && !!this.last?.table.get(frame, id)?.interpolated;
-    this.canvas.title = id === null ? `frame ${frame}` : `track ${id} · frame ${frame}${filled ? ' (filled in)' : ''}`;
+    const r = id === null ? undefined : this.last?.table.get(frame, id);
+    const what = r?.keyframe ? ' (keyframe)' : r?.source === 'follow' ? ' (followed)' : r?.interpolated ? ' (filled in)' : '';
+    this.canvas.title = id === null ? `frame ${frame}` : `track ${id} · frame ${frame}${what}`;
   }
 
   /** Scrolls so the scrollbar's thumb is centred at canvas height `y`. @param {number} y */
@@ -376,6 +379,16 @@ export class Timeline {
         ctx.fillStyle = filled ? (this.hatch(ctx, id, dpr) ?? solid) : solid;
         // At least one device pixel wide, so a single-frame track is still visible.
         ctx.fillRect(this.gutter + (a - v.start) * fw, y, Math.max(1, (b - a + 1) * fw), this.rowH - gap);
+      }
+      // Followed spans: a band along the row's foot; keyframes: a tick across the row.
+      const band = Math.max(1, Math.round((this.rowH - gap) / 4));
+      for (const span of followedSpans(table, id)) {
+        if (span.end < first || span.start > last) continue;
+        ctx.fillStyle = '#ffffff';
+        ctx.fillRect(this.gutter + (span.start - v.start) * fw, y + this.rowH - gap - band, Math.max(1, (span.end - span.start + 1) * fw), band);
+        for (const k of span.keys) {
+          ctx.fillRect(this.gutter + (k - v.start + 0.5) * fw - Math.max(1, dpr), y, Math.max(2, 2 * dpr), this.rowH - gap);
+        }
       }
     }
     ctx.restore();

@@ -4,6 +4,12 @@
 // The worker paints the page's frame canvas (handed over once with `attach`), so the page
 // only draws overlays: a tracked frame is painted just before its result is posted. Only
 // `finish` sends messages before its answer: `{ id, progress }` reports of the offline pass.
+//
+// Following a shape (`followStart`, then one `followStep` per frame, `followEnd`) is driven by
+// the page a frame at a time rather than as one long request with progress messages: video
+// and image frames come from the page (in either direction), the page's progress bar moves
+// with each answer, and Cancel simply stops asking (a long request could not be interrupted:
+// the worker runs one request at a time and has no shared memory with the page).
 
 /**
  * @typedef {import('../model/tracks.js').TrackRecord} TrackRecord
@@ -44,6 +50,9 @@
  * }} StepResult  `warmup`: how far the detector's model has learnt the scene (a background
  *   model's first frames detect nothing); null for detectors that need no warm-up
  *
+ * @typedef {import('../../pkg/shapetrack.js').FollowStepJs & { frame: number }} FollowStep
+ *   the follower's answer for one frame
+ *
  * @typedef {{ type: 'open' } & OpenRequest
  *   | { type: 'attach', canvas: OffscreenCanvas }
  *   | { type: 'paint', width: number, height: number, bitmap?: ImageBitmap | null }
@@ -51,6 +60,9 @@
  *   | { type: 'setDetector', detector: string, detectorOptions?: Record<string, unknown> }
  *   | { type: 'render', frame: number }
  *   | { type: 'finish' }
+ *   | { type: 'followStart', frame: number, to: number, mask: import('../model/tracks.js').Rle, bitmap?: ImageBitmap }
+ *   | { type: 'followStep', frame: number, bitmap?: ImageBitmap }
+ *   | { type: 'followEnd' }
  *   | { type: 'tracks' }
  *   | { type: 'close' }} Request
  */
@@ -164,6 +176,33 @@ export class WorkerClient {
    */
   finish(onProgress) {
     return this.request({ type: 'finish' }, [], onProgress);
+  }
+
+  /**
+   * Starts following a shape from frame `frame` for a leg ending at frame `to`.
+   * @param {number} frame
+   * @param {number} to
+   * @param {import('../model/tracks.js').Rle} mask the shape, RLE of the whole frame
+   * @param {ImageBitmap} [bitmap] frame `frame`'s pixels (transferred), for video and image sources
+   * @returns {Promise<{}>}
+   */
+  followStart(frame, to, mask, bitmap) {
+    return this.request({ type: 'followStart', frame, to, mask, bitmap }, bitmap ? [bitmap] : []);
+  }
+
+  /**
+   * Follows the shape into frame `frame`, the next of the leg.
+   * @param {number} frame
+   * @param {ImageBitmap} [bitmap]
+   * @returns {Promise<{ step: FollowStep }>}
+   */
+  followStep(frame, bitmap) {
+    return this.request({ type: 'followStep', frame, bitmap }, bitmap ? [bitmap] : []);
+  }
+
+  /** Ends the follow under way. @returns {Promise<{}>} */
+  followEnd() {
+    return this.request({ type: 'followEnd' });
   }
 
   terminate() {

@@ -26,7 +26,11 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
  *   scene: import('../../pkg/shapetrack.js').SynthScene | null,
  *   canvas: OffscreenCanvas | null,
  *   ctx2d: OffscreenCanvasRenderingContext2D | null,
- * }} Session
+ *   follower: import('../../pkg/shapetrack.js').Follower | null,
+ *   followTo: number,
+ *   cache: Map<number, Uint8ClampedArray>,
+ * }} Session  `follower`: the shape being followed (`followStart`); `followTo`: the frame its
+ *   leg ends at; `cache`: synthetic frames rendered ahead of a backward leg (see `sceneFrame`)
  */
 
 /** @type {Session | null} */
@@ -80,6 +84,13 @@ async function dispatch(req) {
       return { result: finish(req.id), transfer: [] };
     case 'tracks':
       return { result: { records: need().tracker.tracks() }, transfer: [] };
+    case 'followStart':
+      return { result: await followStart(req.frame, req.to, req.mask, req.bitmap ?? null), transfer: [] };
+    case 'followStep':
+      return { result: await followStep(req.frame, req.bitmap ?? null), transfer: [] };
+    case 'followEnd':
+      followEnd();
+      return { result: {}, transfer: [] };
     case 'close':
       close();
       return { result: {}, transfer: [] };
@@ -95,6 +106,7 @@ function need() {
 
 function close() {
   if (!session) return;
+  followEnd();
   session.detector.dispose?.();
   session.tracker.free();
   session.buffer.free();
@@ -129,7 +141,21 @@ async function open(req) {
   // With an end to the video the tracker keeps what the offline pass needs (appearance
   // snapshots), so the page may switch to offline at any time before the end.
   const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker }, req.offline ? { fps } : null);
-  session = { core, memory, width, height, buffer, tracker, detector, scene, canvas: null, ctx2d: null };
+  session = {
+    core,
+    memory,
+    width,
+    height,
+    buffer,
+    tracker,
+    detector,
+    scene,
+    canvas: null,
+    ctx2d: null,
+    follower: null,
+    followTo: 0,
+    cache: new Map(),
+  };
   return {
     width,
     height,
@@ -317,4 +343,85 @@ function render(frame) {
   sf.free();
   paintBuffer(s);
   return { groundTruth };
+}
+
+// ---------------------------------------------------------------- follow this shape
+
+/**
+ * Synthetic frames rendered at once ahead of a backward leg. The scene renders forward cheaply
+ * (a few ms a frame) but any earlier frame replays from its last checkpoint (up to 100 frames
+ * back), so a backward leg renders a block of frames forward, keeps their pixels (~3.7 MB each
+ * at 1280×720) and steps back through them.
+ */
+const BACK_BLOCK = 12;
+
+/**
+ * Puts frame `n` of the leg being followed into the frame buffer: the synthetic scene's, or
+ * the page's bitmap (videos and image sequences: the page grabs them, in either direction).
+ * @param {Session} s
+ * @param {number} n
+ * @param {ImageBitmap | null} bitmap
+ */
+function followFrame(s, n, bitmap) {
+  if (bitmap) {
+    load(s, bitmap);
+    bitmap.close();
+    return;
+  }
+  const scene = s.scene;
+  if (!scene) throw new Error(`frame ${n}: no pixels sent`);
+  const cached = s.cache.get(n);
+  if (cached) {
+    pixels(s).set(cached);
+    return;
+  }
+  s.cache.clear();
+  if (s.followTo < n) {
+    // Backward: render the block ending at n in order, keep its frames but n.
+    const lo = Math.max(1, s.followTo, n - BACK_BLOCK + 1);
+    for (let k = lo; k < n; k++) {
+      scene.render(k, s.buffer).free();
+      s.cache.set(k, pixels(s).slice());
+    }
+  }
+  scene.render(n, s.buffer).free();
+}
+
+/**
+ * Starts following the shape `mask` (RLE of the whole frame) on frame `frame`, for a leg that
+ * ends at frame `to` (either side of `frame`). The core's Follower checks the mask (an empty
+ * one is an error); the scene checks the frame's range. Replaces any follow under way.
+ * @param {number} frame
+ * @param {number} to
+ * @param {import('../model/tracks.js').Rle} mask
+ * @param {ImageBitmap | null} bitmap
+ */
+async function followStart(frame, to, mask, bitmap) {
+  const s = need();
+  followEnd();
+  s.followTo = to;
+  followFrame(s, frame, bitmap);
+  s.follower = new s.core.Follower(s.buffer, mask);
+  return {};
+}
+
+/**
+ * Follows the target into frame `frame` (the next one of the leg, in its direction).
+ * @param {number} frame
+ * @param {ImageBitmap | null} bitmap
+ */
+async function followStep(frame, bitmap) {
+  const s = need();
+  if (!s.follower) throw new Error('no follow under way: send "followStart" first');
+  followFrame(s, frame, bitmap);
+  const out = s.follower.step(s.buffer);
+  return { step: { frame, ...out } };
+}
+
+/** Ends the follow under way (frees the follower and the frames kept for it). */
+function followEnd() {
+  if (!session) return;
+  session.follower?.free();
+  session.follower = null;
+  session.cache.clear();
 }
