@@ -6,9 +6,8 @@
 //! Frames are decoded one at a time in the direction of travel, so memory stays flat over a
 //! long folder for `follow` (`vot` keeps a sequence's frames, since its runs restart often).
 
+use crate::detect::{Kind, Runner};
 use image::RgbImage;
-use shapetrack::detect::background::{BackgroundConfig, BackgroundSubtractor};
-use shapetrack::detect::Detector;
 use shapetrack::eval::vot::{anchors_every, run_anchor_protocol, run_reset_protocol};
 use shapetrack::eval::vot::{overlap, OverlapMethod, ResetParams};
 use shapetrack::follow::{
@@ -29,7 +28,9 @@ use std::time::{Duration, Instant};
 pub enum DetectorKind {
     /// None: the follower alone (keypoints, transform, colour).
     None,
-    /// The adaptive background subtractor's blobs (static cameras), one model per direction.
+    /// What `shapetrack detect --detector auto` runs without boxes: the adaptive background
+    /// subtractor when the first frames show a static camera, the moving-camera detector
+    /// otherwise; one detector per direction of travel.
     Auto,
 }
 
@@ -99,11 +100,11 @@ pub enum Method {
     Copy,
 }
 
-/// One direction of travel: a follower and, with `--detector auto`, its own background model
-/// (it must see frames in order).
+/// One direction of travel: a follower and, with `--detector auto`, its own detector (its
+/// background model must see the frames in order).
 struct Travel {
     follower: Follower,
-    detector: Option<BackgroundSubtractor>,
+    detector: Option<Runner>,
 }
 
 impl Travel {
@@ -117,8 +118,8 @@ impl Travel {
         let detector = match kind {
             DetectorKind::None => None,
             DetectorKind::Auto => {
-                let mut d = BackgroundSubtractor::new(BackgroundConfig::default())?;
-                d.detect(frame)?;
+                let mut d = Runner::new(Kind::Auto, None)?;
+                d.detect(0, frame)?;
                 Some(d)
             }
         };
@@ -132,7 +133,8 @@ impl Travel {
     ) -> Result<FollowStep, Box<dyn std::error::Error>> {
         let t = Instant::now();
         let dets: Vec<Detection> = match &mut self.detector {
-            Some(d) => d.detect(frame)?,
+            // The frame number only picks a frame's boxes for box refinement (not used here).
+            Some(d) => d.detect(0, frame)?,
             None => Vec::new(),
         };
         let s = self.follower.step(frame, &dets)?;
