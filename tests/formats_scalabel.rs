@@ -244,3 +244,24 @@ fn truncated_and_garbled_files_never_panic() {
     }
     assert!(errors > 100);
 }
+
+#[test]
+fn plain_integer_ids_keep_their_value_and_others_are_numbered_after_them() {
+    let mut ids = IdMap::default();
+    // A tracker's ids, first seen out of order (a later id's earlier views): kept as given.
+    assert_eq!(ids.intern("6"), 6);
+    assert_eq!(ids.intern("5"), 5);
+    assert_eq!(ids.intern("6"), 6);
+    // Strings that are not plain positive integers are numbered after the largest so far.
+    assert_eq!(ids.intern("a-00122062"), 7);
+    assert_eq!(ids.intern("07"), 8);
+    assert_eq!(ids.intern("0"), 9);
+    assert_eq!(ids.intern("-3"), 10);
+    assert_eq!(ids.intern("99999999999999999999"), 11);
+    // A plain integer whose value is taken by a numbered string gets the next one.
+    assert_eq!(ids.intern("8"), 12);
+    assert_eq!(ids.name(8), Some("07"));
+    assert_eq!(ids.name(12), Some("8"));
+    assert_eq!(ids.name(1), None);
+    assert_eq!(ids.len(), 8);
+}

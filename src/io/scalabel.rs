@@ -7,10 +7,11 @@
 //!   model is kept (including `null`s), so [`write_scalabel`] writes a file read unchanged
 //!   back as the same JSON.
 //! - [`to_records`] turns frames into the house [`Record`]s: frame = `frameIndex + 1` (records
-//!   are 1-based), string ids → dense integers per video in order of first appearance (the
-//!   [`IdMap`] restores them), categories → class integers ([`Categories`], BDD100K's MOT list
-//!   first), `score` (absent: 1), `attributes.occluded` → [`RecordFlags::occluded`]; labels
-//!   flagged `crowd` can be left out (BDD100K's evaluation ignores them).
+//!   are 1-based), string ids → integers per video (a plain positive integer keeps its value,
+//!   other strings are numbered in order of first appearance; the [`IdMap`] restores them),
+//!   categories → class integers ([`Categories`], BDD100K's MOT list first), `score` (absent:
+//!   1), `attributes.occluded` → [`RecordFlags::occluded`]; labels flagged `crowd` can be left
+//!   out (BDD100K's evaluation ignores them).
 //! - [`from_records`] writes records (a tracker's output) as frames of one video.
 //!
 //! **Boxes.** Scalabel's `box2d` includes its last pixel: width = `x2 − x1 + 1` (Scalabel's own
@@ -82,31 +83,49 @@ pub struct ScalabelFrame {
     pub raw: Map<String, Value>,
 }
 
-/// Track ids of one video: the file's strings ↔ the records' integers (1, 2, …).
+/// Track ids of one video: the file's strings ↔ the records' integers. An id written as a
+/// positive integer in plain decimal (`"7"`, not `"07"`) keeps its value, so a tracker's ids
+/// survive a round trip through the file; any other string (`"a-00122062"`), or one whose
+/// value is already taken, gets the integer after the largest given so far (1, 2, … in order
+/// of first appearance when no id is a number).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct IdMap {
     to_int: BTreeMap<String, i64>,
-    to_str: Vec<String>,
+    to_str: BTreeMap<i64, String>,
+}
+
+/// The largest id kept as its own value: JavaScript's largest exact integer, since records
+/// reach the browser as JS numbers.
+const MAX_KEPT_ID: i64 = (1 << 53) - 1;
+
+/// `s` as an id of its own value: a positive integer in plain decimal, at most
+/// [`MAX_KEPT_ID`].
+fn plain_integer(s: &str) -> Option<i64> {
+    let plain = !s.is_empty() && !s.starts_with('0') && s.bytes().all(|b| b.is_ascii_digit());
+    plain
+        .then(|| s.parse::<i64>().ok())
+        .flatten()
+        .filter(|&i| (1..=MAX_KEPT_ID).contains(&i))
 }
 
 impl IdMap {
-    /// The integer of `s`, given in order of first appearance.
+    /// The integer of `s` (see [`IdMap`]).
     pub fn intern(&mut self, s: &str) -> i64 {
         if let Some(&i) = self.to_int.get(s) {
             return i;
         }
-        self.to_str.push(s.to_string());
-        let i = self.to_str.len() as i64;
+        let i = match plain_integer(s) {
+            Some(i) if !self.to_str.contains_key(&i) => i,
+            _ => self.to_str.last_key_value().map_or(1, |(&k, _)| k + 1),
+        };
+        self.to_str.insert(i, s.to_string());
         self.to_int.insert(s.to_string(), i);
         i
     }
 
     /// The string of integer id `i` (`None` for ids this map did not give).
     pub fn name(&self, i: i64) -> Option<&str> {
-        usize::try_from(i - 1)
-            .ok()
-            .and_then(|k| self.to_str.get(k))
-            .map(String::as_str)
+        self.to_str.get(&i).map(String::as_str)
     }
 
     /// Number of ids.
