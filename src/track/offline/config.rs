@@ -132,6 +132,13 @@ pub struct FillConfig {
     /// 72.25 → 72.33; `tests/data/quality/README.md`). Coasted shapes inside a track are
     /// replaced by the fill where one is made, whatever this says.
     pub coasted_tails: bool,
+    /// A mask filled into a gap is the nearer end's mask scaled (about its centroid, each axis
+    /// apart) to the box size interpolated between the two ends, then moved along the path, so
+    /// a shape that grows as it enters the frame or comes closer is filled at the size between.
+    /// `false`: translated only. Needs the image size (known with frames or a sequence size).
+    /// Default true: on the grid's 13 mask cells offline mean HOTA 74.99 → 75.52, 11 cells up,
+    /// one down by 0.12 (`tests/data/quality/README.md`).
+    pub scale_masks: bool,
 }
 
 impl Default for FillConfig {
@@ -143,6 +150,7 @@ impl Default for FillConfig {
             max_gap_seconds: None,
             hidden_ratio: 0.5,
             coasted_tails: false,
+            scale_masks: true,
         }
     }
 }

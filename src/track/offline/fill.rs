@@ -22,15 +22,19 @@
 use super::config::{FillConfig, RelinkConfig, Trajectory};
 use super::relink::{history_frames, rollout_backward, rollout_forward, track_end, Side};
 use super::{OfflineError, Phase, Progress};
+use crate::features::transform::{Affine, Transform};
+use crate::follow::warp_mask;
 use crate::frame::{BBox, Point, TrackState, TrackedShape};
 
 /// Fills the gaps of `shapes` (final ids; `origin[i]` is shape `i`'s id before the joins;
 /// `areas[i]` its mask area, given apart from the mask because a compact history carries the
 /// bitmaps of run ends only). Returns the filled shapes (not yet merged into `shapes`).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn fill_gaps(
     shapes: &[TrackedShape],
     areas: &[Option<u64>],
     origin: &[u64],
+    image_size: Option<(u32, u32)>,
     cfg: &FillConfig,
     relink: &RelinkConfig,
     fps: f64,
@@ -80,7 +84,15 @@ pub(crate) fn fill_gaps(
             for (j, c) in path.iter().enumerate() {
                 let step = j as u32 + 1;
                 let alpha = f64::from(step) / f64::from(missing + 1);
-                out.push(filled_shape(a, b, a.frame + step, *c, alpha));
+                let mut s = filled_shape(a, b, a.frame + step, *c, alpha);
+                if let (true, Some((w, h))) = (cfg.scale_masks, image_size) {
+                    if let Some(m) = scaled_mask(a, b, *c, alpha, w, h) {
+                        s.bbox = m.bbox();
+                        s.centroid = *c;
+                        s.mask = Some(m);
+                    }
+                }
+                out.push(s);
             }
         }
     }
@@ -178,6 +190,41 @@ fn kalman_path(
         path.push((pf + oa) * (1.0 - alpha) + (pb + ob) * alpha);
     }
     Ok(path)
+}
+
+/// The nearer end's mask scaled about its centroid to the box size a fraction `alpha` of the
+/// way from `a`'s mask box to `b`'s, with its centroid at `c`, in a `w × h` frame; `None`
+/// unless both ends have masks and the result has pixels.
+fn scaled_mask(
+    a: &TrackedShape,
+    b: &TrackedShape,
+    c: Point,
+    alpha: f64,
+    w: u32,
+    h: u32,
+) -> Option<crate::frame::Mask> {
+    let (ma, mb) = (a.mask.as_ref()?, b.mask.as_ref()?);
+    let (ba, bb) = (ma.bbox(), mb.bbox());
+    let (src, m, box_src) = if alpha <= 0.5 {
+        (a, ma, ba)
+    } else {
+        (b, mb, bb)
+    };
+    if box_src.w <= 0.0 || box_src.h <= 0.0 {
+        return None;
+    }
+    let sx = lerp(ba.w, bb.w, alpha) / box_src.w;
+    let sy = lerp(ba.h, bb.h, alpha) / box_src.h;
+    let t = Transform::Affine(Affine {
+        a: sx,
+        b: 0.0,
+        c: 0.0,
+        d: sy,
+        tx: c.x - sx * src.centroid.x,
+        ty: c.y - sy * src.centroid.y,
+    });
+    let out = warp_mask(m, &t, w, h);
+    (out.area() > 0).then_some(out)
 }
 
 fn lerp(p: f64, q: f64, a: f64) -> f64 {
@@ -285,6 +332,7 @@ mod tests {
                 shapes,
                 &mask_areas(shapes),
                 &origin,
+                None,
                 cfg,
                 &RelinkConfig::default(),
                 25.0,
@@ -341,6 +389,7 @@ mod tests {
             &shapes,
             &mask_areas(&shapes),
             &[1, 1],
+            None,
             &FillConfig::default(),
             &RelinkConfig::default(),
             25.0,
@@ -372,6 +421,7 @@ mod tests {
             &shapes,
             &mask_areas(&shapes),
             &[1, 1],
+            None,
             &cfg,
             &RelinkConfig::default(),
             25.0,
@@ -382,6 +432,7 @@ mod tests {
             &shapes,
             &mask_areas(&shapes),
             &[1, 2],
+            None,
             &cfg,
             &RelinkConfig::default(),
             25.0,
@@ -397,6 +448,7 @@ mod tests {
             &shapes,
             &mask_areas(&shapes),
             &[1, 1],
+            None,
             &cfg,
             &RelinkConfig::default(),
             25.0,
@@ -420,6 +472,7 @@ mod tests {
             &shapes,
             &mask_areas(&shapes),
             &[3, 3],
+            None,
             &FillConfig::default(),
             &RelinkConfig::default(),
             10.0,
@@ -435,5 +488,54 @@ mod tests {
             assert_eq!(s.bbox, mk.bbox());
             assert_eq!(Some(s.centroid), mk.centroid());
         }
+    }
+
+    #[test]
+    fn masks_are_scaled_to_the_size_between_the_ends() {
+        // A shape that grows from 10×10 to 30×30 while moving right, missed for 3 frames.
+        let ma = Mask::from_bbox(&BBox::new(0.0, 20.0, 10.0, 10.0));
+        let mb = Mask::from_bbox(&BBox::new(40.0, 10.0, 30.0, 30.0));
+        let mut a = shape(3, 1, ma.bbox());
+        a.mask = Some(ma.clone());
+        a.centroid = ma.centroid().unwrap();
+        let mut b = shape(3, 5, mb.bbox());
+        b.mask = Some(mb.clone());
+        b.centroid = mb.centroid().unwrap();
+        let shapes = [a, b];
+        let run = |size: Option<(u32, u32)>, scale: bool| {
+            let cfg = FillConfig {
+                scale_masks: scale,
+                ..FillConfig::default()
+            };
+            fill_gaps(
+                &shapes,
+                &mask_areas(&shapes),
+                &[3, 3],
+                size,
+                &cfg,
+                &RelinkConfig::default(),
+                10.0,
+                &mut |_| {},
+            )
+            .unwrap()
+        };
+        let widths = |out: &[TrackedShape]| -> Vec<f64> {
+            out.iter()
+                .map(|s| s.mask.as_ref().unwrap().bbox().w)
+                .collect()
+        };
+        let scaled = run(Some((100, 60)), true);
+        assert_eq!(widths(&scaled), [15.0, 20.0, 25.0]);
+        for s in &scaled {
+            let mk = s.mask.as_ref().unwrap();
+            assert_eq!(s.bbox, mk.bbox());
+            // Square to a pixel (nearest-pixel sampling).
+            assert!((mk.bbox().w - mk.bbox().h).abs() <= 1.0, "{:?}", mk.bbox());
+            let c = mk.centroid().unwrap();
+            assert!((c.x - s.centroid.x).abs() <= 1.0 && (c.y - s.centroid.y).abs() <= 1.0);
+        }
+        // Translated only: the nearer end's size; and without an image size, whatever asked.
+        assert_eq!(widths(&run(Some((100, 60)), false)), [10.0, 10.0, 30.0]);
+        assert_eq!(widths(&run(None, true)), [10.0, 10.0, 30.0]);
     }
 }

@@ -343,6 +343,7 @@ pub fn relink_input(
         &shapes,
         &areas,
         &origin,
+        seq.image_size,
         &config.fill,
         &config.relink,
         fps,
