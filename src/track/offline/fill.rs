@@ -84,15 +84,8 @@ pub(crate) fn fill_gaps(
             for (j, c) in path.iter().enumerate() {
                 let step = j as u32 + 1;
                 let alpha = f64::from(step) / f64::from(missing + 1);
-                let mut s = filled_shape(a, b, a.frame + step, *c, alpha);
-                if let (true, Some((w, h))) = (cfg.scale_masks, image_size) {
-                    if let Some(m) = scaled_mask(a, b, *c, alpha, w, h) {
-                        s.bbox = m.bbox();
-                        s.centroid = *c;
-                        s.mask = Some(m);
-                    }
-                }
-                out.push(s);
+                let scale_in = image_size.filter(|_| cfg.scale_masks);
+                out.push(filled_shape(a, b, a.frame + step, *c, alpha, scale_in));
             }
         }
     }
@@ -231,22 +224,28 @@ fn lerp(p: f64, q: f64, a: f64) -> f64 {
     p + (q - p) * a
 }
 
-/// The shape filled in at `frame`, centroid `c`, a fraction `alpha` of the way from `a` to `b`.
+/// The shape filled in at `frame`, centroid `c`, a fraction `alpha` of the way from `a` to `b`;
+/// with `scale_in` (the image size), a mask is scaled to the size between the ends
+/// ([`scaled_mask`]) where it can be, else translated.
 fn filled_shape(
     a: &TrackedShape,
     b: &TrackedShape,
     frame: u32,
     c: Point,
     alpha: f64,
+    scale_in: Option<(u32, u32)>,
 ) -> TrackedShape {
+    let scaled = scale_in.and_then(|(w, h)| scaled_mask(a, b, c, alpha, w, h));
     let src = match (&a.mask, &b.mask) {
         (Some(_), Some(_)) => Some(if alpha <= 0.5 { a } else { b }),
         (Some(_), None) => Some(a),
         (None, Some(_)) => Some(b),
         (None, None) => None,
     };
-    let (bbox, mask, centroid) = match src.and_then(|s| s.mask.as_ref().map(|m| (s, m))) {
-        Some((s, m)) => {
+    let translate = src.and_then(|s| s.mask.as_ref().map(|m| (s, m)));
+    let (bbox, mask, centroid) = match (scaled, translate) {
+        (Some(m), _) => (m.bbox(), Some(m), c),
+        (None, Some((s, m))) => {
             let d = c - s.centroid;
             let (dx, dy) = (d.x.round(), d.y.round());
             (
@@ -255,7 +254,7 @@ fn filled_shape(
                 s.centroid + Point::new(dx, dy),
             )
         }
-        None => {
+        (None, None) => {
             let oa = a.bbox.center() - a.centroid;
             let ob = b.bbox.center() - b.centroid;
             let o = oa + (ob - oa) * alpha;
