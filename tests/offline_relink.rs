@@ -209,7 +209,8 @@ fn offline_tracker_rejoins_what_the_online_pass_broke() {
 /// at (228, 130) instead of the predicted (228, 112).
 ///
 /// Pair errors (mean of the forward and backward rollout errors; fps 10, size √(20·40) =
-/// 28.28 px, radius 28.28·(0.5 + 0.5·gap/10 s)): A→C 0; B→C 20 px / 28.28 = 0.71; A→D
+/// 28.28 px, radius 28.28·(0.5 + 0.5·gap/10 s), a fixed gate set for the hand computation):
+/// A→C 0; B→C 20 px / 28.28 = 0.71; A→D
 /// 9 px / 31.1 = 0.29; B→D 15 px / 31.1 = 0.48. The thesis' order takes the latest master
 /// first: D takes its cheapest slave, A, and C is left with B — both joins wrong. The min-cost
 /// matching pays 0.48 for {A→C, B→D} rather than 1.00 for {A→D, B→C}.
@@ -236,9 +237,12 @@ fn crossing_in_a_shared_gap_min_cost_beats_greedy() {
             .map(|j| j.cost)
     };
 
-    let global = run(shapes.clone(), &OfflineConfig::default(), 10.0);
+    let mut cfg = OfflineConfig::default();
+    (cfg.relink.gate_base, cfg.relink.gate_per_second) = (0.5, 0.5);
+    cfg.relink.calibrate = None;
+    let global = run(shapes.clone(), &cfg, 10.0);
     assert_eq!(pairs(&global), BTreeMap::from([(c, a), (d, b)]));
-    let mut greedy_cfg = OfflineConfig::default();
+    let mut greedy_cfg = cfg.clone();
     greedy_cfg.relink.solver = JoinSolver::Greedy;
     let greedy = run(shapes, &greedy_cfg, 10.0);
     assert_eq!(
@@ -613,4 +617,68 @@ fn rle_history_gives_the_offline_pass_the_same_result() {
             assert_eq!(got, want, "frame {} id {}", s.frame, s.id);
         }
     }
+}
+
+/// The gate widens to the sequence's own motion (`relink.calibrate`): players who weave are
+/// cut by the gate fitted to walkers, and their own tracks say how far off a true continuation
+/// lands. Four long weaving tracks calibrate it; a fifth, broken for 10 frames, is re-joined
+/// under the calibrated gate and not under the fixed one.
+#[test]
+fn the_gate_calibrated_on_the_sequence_rejoins_weaving_tracks() {
+    let weave = |y0: f64, phase: f64| {
+        move |f: f64| {
+            let w = std::f64::consts::TAU * f / 25.0 + phase;
+            Point::new(50.0 + 4.0 * f, y0 + 30.0 * w.sin())
+        }
+    };
+    let mut shapes = Vec::new();
+    for k in 0..4u64 {
+        shapes.extend(track(
+            k + 1,
+            1..=200,
+            weave(300.0 * (k + 1) as f64, k as f64),
+        ));
+    }
+    let broken = weave(1500.0, 0.3);
+    shapes.extend(track(10, 1..=100, broken));
+    shapes.extend(track(11, 111..=200, broken));
+    let joined = |cfg: &OfflineConfig| {
+        run(shapes.clone(), cfg, 25.0)
+            .joins
+            .iter()
+            .any(|j| (j.slave, j.master) == (10, 11))
+    };
+    let mut fixed = OfflineConfig::default();
+    fixed.relink.calibrate = None;
+    assert!(
+        !joined(&fixed),
+        "the fixed gate refuses the weaving continuation"
+    );
+    assert!(
+        joined(&OfflineConfig::default()),
+        "the calibrated gate takes it"
+    );
+}
+
+/// Calibration never narrows the gate: on tracks that move in straight lines every cut
+/// continues exactly (error 0), yet a continuation that lands inside the configured gate but
+/// off the line is still joined.
+#[test]
+fn the_calibrated_gate_is_never_narrower_than_configured() {
+    let mut shapes = Vec::new();
+    for k in 0..4u64 {
+        let y = 300.0 * (k + 1) as f64;
+        shapes.extend(track(k + 1, 1..=200, move |f| {
+            Point::new(50.0 + 4.0 * f, y)
+        }));
+    }
+    let line = |f: f64| Point::new(50.0 + 4.0 * f, 1500.0);
+    shapes.extend(track(10, 1..=100, line));
+    // 15 px off the line: inside the configured radius (20×40 px boxes, 10-frame gap at
+    // 25 fps: 28.3 · (0.75 + 0.25 · 0.4) ≈ 24 px), far outside a gate fitted to error 0.
+    shapes.extend(track(11, 111..=200, move |f| {
+        line(f) + Point::new(0.0, 15.0)
+    }));
+    let out = run(shapes, &OfflineConfig::default(), 25.0);
+    assert!(out.joins.iter().any(|j| (j.slave, j.master) == (10, 11)));
 }

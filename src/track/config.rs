@@ -237,7 +237,7 @@ pub struct Config {
     /// Score thresholds from the sequence's own scores instead of `high_score` and
     /// `new_track_score` (see [`super::scores`]): quantiles of the scores of the detections
     /// matched to confirmed tracks. `None`: the fixed thresholds. Default: high from the
-    /// lowest matched score (quantile 0), births from the 0.2 quantile, chosen on the
+    /// lowest matched score (quantile 0), births from the 0.25 quantile, chosen on the
     /// robustness grid (`tests/data/quality/README.md`).
     pub score_adaptation: Option<ScoreAdaptation>,
     /// An unmatched detection overlapping a detection matched this frame by more than this IoU
@@ -264,7 +264,7 @@ pub struct Config {
     pub max_tentative_misses: u32,
     /// Frames a confirmed track stays lost (searchable, re-identified under its id) before it
     /// is removed, at [`Config::frame_counts_at`] frames per second (scaled to the video's
-    /// [`Config::frame_rate`] when known). Default 30 (1 s).
+    /// [`Config::frame_rate`] when known). Default 38 (1.3 s).
     pub max_lost: u32,
     /// When a tentative track is confirmed, also report its earlier (tentative) frames, so the
     /// output does not miss the first `min_hits − 1` frames of every track. The shapes are
@@ -295,7 +295,7 @@ pub struct Config {
     /// Default 0.5: a low-confidence box must overlap the prediction well.
     pub max_cost_low: f64,
     /// Highest combined cost accepted between a tentative track and a high detection.
-    /// Default 0.9: a new track's velocity is still unknown, so its prediction is loose.
+    /// Default 0.85: a new track's velocity is still unknown, so its prediction is loose.
     pub max_cost_tentative: f64,
     /// How much leaving a track or a detection unmatched costs in the assignment: a pair is
     /// matched only when its cost is below twice this (ByteTrack's lapjv `cost_limit`).
@@ -436,7 +436,7 @@ impl Default for Config {
             // browser detector a constant 1).
             score_adaptation: Some(ScoreAdaptation {
                 high_quantile: 0.0,
-                birth_quantile: 0.2,
+                birth_quantile: 0.25,
                 ..ScoreAdaptation::default()
             }),
             spawn_max_iou: 1.0,
@@ -444,7 +444,7 @@ impl Default for Config {
             min_hits_floor: u32::MAX,
             birth_evidence: Some(0.5),
             max_tentative_misses: 1,
-            max_lost: 30,
+            max_lost: 38,
             report_tentative: true,
             hindsight: Some(Hindsight::default()),
             region_margin: 0.5,
@@ -452,7 +452,7 @@ impl Default for Config {
             max_cost: 0.75,
             reference_max_cost: None,
             max_cost_low: 0.5,
-            max_cost_tentative: 0.9,
+            max_cost_tentative: 0.85,
             unmatched_cost: None,
             lost_velocity_decay: 1.0,
             reupdate_after_gap: true,

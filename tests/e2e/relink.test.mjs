@@ -64,7 +64,10 @@ async function runScene(page, mode) {
       });
     });
   });
-  await page.goto(`${app.server.url}?scene=occlusion&speed=max&mode=${mode}&preset=default`);
+  // Gaps of up to 15 frames filled (the default fills 10; the occlusion scene's bars hide
+  // shapes longer): the page's `?offline=` settings reach the core's pass.
+  const offline = encodeURIComponent(JSON.stringify({ fill: { max_gap: 15 } }));
+  await page.goto(`${app.server.url}?scene=occlusion&speed=max&mode=${mode}&preset=default&offline=${offline}`);
   await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
   await page.waitForFunction(
     ([n, m]) => {

@@ -85,6 +85,12 @@ export class App {
      * @type {import('../pkg/shapetrack.js').TrackerSettings | null}
      */
     this.tracker = null;
+    /**
+     * Offline-pass settings over the core's defaults (re-linker, gap filling; `?offline=` with
+     * JSON, e.g. `{"fill":{"max_gap":30}}`); null: the defaults. The frame rate is the source's.
+     * @type {Omit<import('../pkg/shapetrack.js').OfflineSettings, 'fps'> | null}
+     */
+    this.offlineSettings = null;
     /** @type {{ a: number | null, b: number | null }} */
     this.selection = { a: null, b: null };
     this.options = { masks: true, boxes: true, trails: true, gt: false };
@@ -176,6 +182,7 @@ export class App {
       source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: this.scene },
       detector: this.detector,
       ...(this.tracker ? { tracker: this.tracker } : {}),
+      ...(this.offlineSettings ? { offlineSettings: this.offlineSettings } : {}),
       offline: src?.kind !== 'webcam',
     });
     /** @type {AnySource} */

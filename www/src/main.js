@@ -30,6 +30,16 @@ async function main() {
   if (scene === 'demo' || scene === 'default' || scene === 'occlusion') app.scene = scene;
   const preset = params.get('preset');
   if (preset === 'default' || preset === 'masks') app.tracker = { preset };
+  const offline = params.get('offline');
+  if (offline) {
+    // Settings the core rejects fail the open with its message; JSON that does not parse
+    // fails here, with where.
+    try {
+      app.offlineSettings = JSON.parse(offline);
+    } catch (e) {
+      app.fail(new Error(`?offline= is not JSON: ${e instanceof Error ? e.message : e}`));
+    }
+  }
   if (params.get('mode') === 'offline') {
     app.mode = 'offline';
     byId('mode', HTMLSelectElement).value = 'offline';

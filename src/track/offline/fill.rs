@@ -340,7 +340,11 @@ mod tests {
             .unwrap()
             .len()
         };
-        let cfg = FillConfig::default();
+        // The rule is off by default (measured on the grid); with it on:
+        let cfg = FillConfig {
+            hidden_ratio: 0.5,
+            ..FillConfig::default()
+        };
         // Going behind an occluder (shrinking to a quarter) and coming out (growing back).
         let hide = masked_track(12..=16, |f| match f {
             11 | 17 => 5.0,
@@ -348,12 +352,8 @@ mod tests {
             _ => 20.0,
         });
         assert_eq!(fill(&hide, &cfg), 0);
-        // Without the rule, the hide is filled like any gap.
-        let all = FillConfig {
-            hidden_ratio: 0.0,
-            ..FillConfig::default()
-        };
-        assert_eq!(fill(&hide, &all), 5);
+        // Without the rule (the default), the hide is filled like any gap.
+        assert_eq!(fill(&hide, &FillConfig::default()), 5);
         // A missed detection between whole views, or with only one end partial, is filled.
         assert_eq!(fill(&masked_track(12..=16, |_| 20.0), &cfg), 5);
         let one_side = masked_track(12..=16, |f| if f == 11 { 5.0 } else { 20.0 });

@@ -27,8 +27,10 @@
  *   tracker?: TrackerSettings,
  *   detectorOptions?: Record<string, unknown>,
  *   offline?: boolean,
+ *   offlineSettings?: Omit<import('../../pkg/shapetrack.js').OfflineSettings, 'fps'>,
  * }} OpenRequest  `offline`: keep what the offline pass needs (a video or image sequence
- *   with an end; not the webcam), so `finish` can run it
+ *   with an end; not the webcam), so `finish` can run it; `offlineSettings`: that pass's
+ *   settings over the core's defaults (the frame rate is the source's)
  *
  * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string, classes: string[], offline: boolean }} OpenResult
  *   `classes`: the detector's class names by class id (empty when it has none; an empty name

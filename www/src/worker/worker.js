@@ -140,7 +140,7 @@ async function open(req) {
   if (req.source.kind === 'frames') fps = req.source.fps || fps;
   // With an end to the video the tracker keeps what the offline pass needs (appearance
   // snapshots), so the page may switch to offline at any time before the end.
-  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker }, req.offline ? { fps } : null);
+  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker }, req.offline ? { ...req.offlineSettings, fps } : null);
   session = {
     core,
     memory,
