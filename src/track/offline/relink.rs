@@ -258,8 +258,60 @@ struct Candidate {
     connections: Option<usize>,
 }
 
+/// The gate radius for continuing `end` by `start` (module docs) before any calibration:
+/// `size · (gate_base + gate_per_second · gap)`, `size` the geometric mean of both ends'.
+fn gate_radius(end: &EndState, start: &EndState, cfg: &RelinkConfig, fps: f64) -> f64 {
+    let gap = start.frame.saturating_sub(end.frame);
+    (end.size * start.size).sqrt() * (cfg.gate_base + cfg.gate_per_second * f64::from(gap) / fps)
+}
+
+/// How far the rollout from `end` over the gap lands from `start` (averaged with the reverse
+/// rollout when `bidirectional`), `None` when a rollout leaves the image `bounds`: the object
+/// went out of view, and whoever starts later is not it (the thesis treats out-of-view as a
+/// challenge of its own).
+fn rollout_error(
+    end: &EndState,
+    start: &EndState,
+    cfg: &RelinkConfig,
+    fps: f64,
+    bounds: Option<(u32, u32)>,
+) -> Result<Option<f64>, MotionError> {
+    let inside = |p: &Point| match bounds {
+        Some((w, h)) => p.x >= 0.0 && p.y >= 0.0 && p.x <= f64::from(w) && p.y <= f64::from(h),
+        None => true,
+    };
+    let gap = start.frame.saturating_sub(end.frame);
+    let fwd = rollout_forward(end, gap, fps, cfg.acceleration)?;
+    let Some(&pf) = fwd.last() else {
+        return Ok(None);
+    };
+    if !fwd.iter().all(inside) {
+        return Ok(None);
+    }
+    let mut err = pf.dist(start.position);
+    if cfg.bidirectional {
+        let bwd = rollout_backward(start, gap, fps, cfg.acceleration)?;
+        if !bwd.iter().all(inside) {
+            return Ok(None);
+        }
+        if let Some(&pb) = bwd.last() {
+            err = 0.5 * (err + pb.dist(end.position));
+        }
+    }
+    Ok(Some(err))
+}
+
+/// `err` over `radius`: the gate-normalised cost (0 for a perfect continuation under a zero
+/// gate, `None` for any other under it).
+fn normalised(err: f64, radius: f64) -> Option<f64> {
+    if radius.is_nan() || radius <= 0.0 {
+        return (err == 0.0).then_some(0.0);
+    }
+    Some(err / radius)
+}
+
 /// The gate-normalised cost of joining `slave` to `master` (module docs), `None` when a gate
-/// refuses the pair.
+/// refuses the pair. `gate_scale` multiplies the radius (see [`calibrated_gate`]).
 fn pair_cost(
     slave: (&Piece, &EndState),
     master: (&Piece, &EndState),
@@ -268,10 +320,6 @@ fn pair_cost(
     bounds: Option<(u32, u32)>,
     gate_scale: f64,
 ) -> Result<Option<f64>, MotionError> {
-    let inside = |p: &Point| match bounds {
-        Some((w, h)) => p.x >= 0.0 && p.y >= 0.0 && p.x <= f64::from(w) && p.y <= f64::from(h),
-        None => true,
-    };
     let (sp, se) = slave;
     let (mp, ms) = master;
     if sp.last >= mp.first || se.frame >= ms.frame {
@@ -282,8 +330,7 @@ fn pair_cost(
     if !(s1 > 0.0 && s2 > 0.0) || s1.max(s2) > cfg.max_size_ratio * s1.min(s2) {
         return Ok(None);
     }
-    let scale = (s1 * s2).sqrt();
-    let radius = gate_scale * scale * (cfg.gate_base + cfg.gate_per_second * f64::from(gap) / fps);
+    let radius = gate_scale * gate_radius(se, ms, cfg, fps);
     // Exact pruning before the rollouts: a prediction moves the end by the closed-form
     // displacement `v·t + ½·a·t²`, so the error is at least the ends' distance minus that.
     let t = f64::from(gap) / fps;
@@ -299,30 +346,10 @@ fn pair_cost(
     if lb > radius * (1.0 + 1e-9) {
         return Ok(None);
     }
-    let fwd = rollout_forward(se, gap, fps, cfg.acceleration)?;
-    let Some(&pf) = fwd.last() else {
+    let Some(err) = rollout_error(se, ms, cfg, fps, bounds)? else {
         return Ok(None);
     };
-    // An object predicted to leave the image went out of view: whoever starts later is not
-    // it (the thesis treats out-of-view as a challenge of its own).
-    if !fwd.iter().all(inside) {
-        return Ok(None);
-    }
-    let mut err = pf.dist(ms.position);
-    if cfg.bidirectional {
-        let bwd = rollout_backward(ms, gap, fps, cfg.acceleration)?;
-        if !bwd.iter().all(inside) {
-            return Ok(None);
-        }
-        if let Some(&pb) = bwd.last() {
-            err = 0.5 * (err + pb.dist(se.position));
-        }
-    }
-    if radius.is_nan() || radius <= 0.0 {
-        return Ok((err == 0.0).then_some(0.0));
-    }
-    let cost = err / radius;
-    Ok((cost.is_finite() && cost <= 1.0).then_some(cost))
+    Ok(normalised(err, radius).filter(|c| c.is_finite() && *c <= 1.0))
 }
 
 /// Artificial gaps cut per piece and gap length, at most.
@@ -331,11 +358,12 @@ const CUTS_PER_PIECE: usize = 8;
 /// The gate multiplier under which a fraction `q` of this sequence's own continuations pass:
 /// every piece long enough is cut at a few places with an artificial gap (a fifth of a second
 /// up to two seconds, within `max_gap`), both sides' ends are estimated as for a real pair,
-/// and the quantile `q` of their errors over the gate radius is the multiplier, clamped to
-/// `[1, GATE_SCALE_MAX]` (1 when fewer than [`MIN_CUTS`] cuts were made). Objects that turn
-/// and change pace (players) then get a wider gate than pedestrians, whose motion the
-/// configured gate fits; the gate is never made narrower than configured (a narrower one lost
-/// joins on MOT15 and BDD100K, whose tracks break where motion is hardest to predict).
+/// and the quantile `q` of their rollout errors over the gate radius is the multiplier,
+/// clamped to `[1, GATE_SCALE_MAX]` (1 when fewer than [`MIN_CUTS`] cuts were made). Objects
+/// that turn and change pace (players) then get a wider gate than pedestrians, whose motion
+/// the configured gate fits; the gate is never made narrower than configured (a narrower one
+/// lost joins on MOT15 and BDD100K, whose tracks break where motion is hardest to predict).
+/// A cut is a true continuation, so no size or view gate applies to it.
 fn calibrated_gate(
     shapes: &[TrackedShape],
     pieces: &[Piece],
@@ -352,13 +380,6 @@ fn calibrated_gate(
         .map(|s| ((s * fps).round() as u32).max(1))
         .filter(|&g| g <= max_gap)
         .collect();
-    // A cut is a true continuation: no size or view gate applies to it.
-    const WIDE: f64 = 1e6;
-    let base = RelinkConfig {
-        stay_in_view: false,
-        max_size_ratio: f64::INFINITY,
-        ..cfg.clone()
-    };
     for p in pieces {
         for &g in &gaps {
             let need = 2 * history + g;
@@ -369,40 +390,21 @@ fn calibrated_gate(
             let cuts = (span / history.max(1) + 1).min(CUTS_PER_PIECE as u32);
             for k in 0..cuts {
                 let f0 = p.first + history + k * span / cuts.max(1);
-                let before: Vec<usize> = p
-                    .idx
-                    .iter()
-                    .copied()
-                    .filter(|&i| shapes[i].frame <= f0)
-                    .collect();
-                let after: Vec<usize> = p
-                    .idx
-                    .iter()
-                    .copied()
-                    .filter(|&i| shapes[i].frame >= f0 + g)
-                    .collect();
+                // `idx` runs by frame: the shapes up to the cut, and from the gap's end.
+                let before = &p.idx[..p.idx.partition_point(|&i| shapes[i].frame <= f0)];
+                let after = &p.idx[p.idx.partition_point(|&i| shapes[i].frame < f0 + g)..];
                 let (Some(se), Some(ms)) = (
-                    track_end(shapes, &before, Side::End, history, r, fps),
-                    track_end(shapes, &after, Side::Start, history, r, fps),
+                    track_end(shapes, before, Side::End, history, r, fps),
+                    track_end(shapes, after, Side::Start, history, r, fps),
                 ) else {
                     continue;
                 };
-                let sp = Piece {
-                    id: p.id,
-                    idx: before,
-                    first: p.first,
-                    last: se.frame,
-                };
-                let mp = Piece {
-                    id: p.id,
-                    idx: after,
-                    first: ms.frame,
-                    last: p.last,
-                };
-                // Scored under a gate [`WIDE`] times the configured one, so that every cut
-                // passes: its cost times `WIDE` is the error over the configured radius.
-                if let Some(c) = pair_cost((&sp, &se), (&mp, &ms), &base, fps, None, WIDE)? {
-                    ratios.push(c * WIDE);
+                if se.frame >= ms.frame || !(se.size > 0.0 && ms.size > 0.0) {
+                    continue;
+                }
+                if let Some(err) = rollout_error(&se, &ms, cfg, fps, None)? {
+                    let ratio = normalised(err, gate_radius(&se, &ms, cfg, fps));
+                    ratios.extend(ratio.filter(|c| c.is_finite()));
                 }
             }
         }
