@@ -6,7 +6,7 @@
 use proptest::prelude::*;
 use shapetrack::frame::{BBox, Detection, Mask, TrackState, TrackedShape};
 use shapetrack::track::{
-    Candidate, Config, Hindsight, PairCost, ReportBox, Track, TrackError, Tracker,
+    AppearanceConfig, Candidate, Config, Hindsight, PairCost, ReportBox, Track, TrackError, Tracker,
 };
 
 fn det(x: f64, y: f64) -> Detection {
@@ -283,6 +283,22 @@ fn invalid_detections_are_typed_errors() {
         Tracker::new(bad_cfg),
         Err(TrackError::InvalidConfig { .. })
     ));
+    // A merged view is larger than expected: a ratio of 1 or less would call every view one.
+    for r in [1.0, 0.5, f64::INFINITY] {
+        let bad = Config {
+            appearance: AppearanceConfig {
+                merged_ratio: Some(r),
+                ..AppearanceConfig::default()
+            },
+            ..config()
+        };
+        match Tracker::new(bad) {
+            Err(TrackError::InvalidConfig { field, .. }) => {
+                assert_eq!(field, "appearance.merged_ratio")
+            }
+            other => panic!("merged_ratio {r}: {other:?}"),
+        }
+    }
 }
 
 /// A term with no data for any pair: it must not change a single decision.
@@ -538,4 +554,81 @@ fn disagreeing_motion_moves_no_lost_track() {
     let [with, without] = hidden_through_a_jump(10, |i| if i == 1 { -70.0 } else { 70.0 }, 0.0);
     assert_eq!(with, vec![1]);
     assert_eq!(without, vec![1]);
+}
+
+/// The lifecycle tracker of these tests with `appearance.merged_ratio`.
+fn merge_aware(merged_ratio: Option<f64>) -> Tracker {
+    Tracker::new(Config {
+        appearance: AppearanceConfig {
+            merged_ratio,
+            ..AppearanceConfig::default()
+        },
+        ..config()
+    })
+    .unwrap()
+}
+
+/// Two shapes side by side moving right, one above the other; for frames 10–13 the detector
+/// gives one box for both (merged). Returns the tracks' predicted boxes after the merge, by id.
+fn through_a_merge(merged_ratio: Option<f64>) -> Vec<(u64, BBox)> {
+    let mut t = merge_aware(merged_ratio);
+    for k in 0..14 {
+        let x = 10.0 + 4.0 * k as f64;
+        let dets = if (10..14).contains(&k) {
+            vec![Detection::from_box(BBox::new(x, 100.0, 40.0, 160.0), 0.9)]
+        } else {
+            vec![
+                Detection::from_box(BBox::new(x, 100.0, 40.0, 80.0), 0.9),
+                Detection::from_box(BBox::new(x, 180.0, 40.0, 80.0), 0.9),
+            ]
+        };
+        t.update(None, &dets).unwrap();
+    }
+    t.tracks()
+        .iter()
+        .filter_map(|tr| Some((tr.id()?, tr.predicted_box())))
+        .collect()
+}
+
+#[test]
+fn a_view_merged_with_a_neighbour_does_not_move_the_track() {
+    // Trusted, the merged box drags the track that takes it to the middle of the pair and
+    // doubles its height: when the two part, it is nobody's place.
+    let trusted = through_a_merge(None);
+    assert_eq!(trusted.len(), 2);
+    assert!(trusted.iter().any(|(_, b)| b.h > 120.0), "{trusted:?}");
+    // Taken as merged, it keeps the track alive where its own shape is, at its own size.
+    let kept = through_a_merge(Some(1.6));
+    assert_eq!(kept.len(), 2);
+    for (_, b) in &kept {
+        assert!((b.h - 80.0).abs() < 8.0, "{kept:?}");
+        let (cy_top, cy_bottom) = (140.0, 220.0);
+        let cy = b.y + b.h / 2.0;
+        assert!(
+            (cy - cy_top).abs() < 8.0 || (cy - cy_bottom).abs() < 8.0,
+            "{kept:?}"
+        );
+        // It still moves with its shape (x at frame 15: 66).
+        assert!((b.x - 66.0).abs() < 6.0, "{kept:?}");
+    }
+}
+
+#[test]
+fn a_box_that_grows_alone_is_not_a_merge() {
+    // A shape approaching the camera doubles its box's area every frame (a 5 fps dashcam):
+    // with no other track under the box, every view is trusted, as without the rule.
+    let grown = |merged_ratio| {
+        let mut t = merge_aware(merged_ratio);
+        let mut side = 20.0;
+        for _ in 0..6 {
+            let d = Detection::from_box(BBox::new(100.0, 100.0, side, side), 0.9);
+            t.update(None, &[d]).unwrap();
+            side *= 1.45;
+        }
+        assert_eq!(t.tracks().len(), 1);
+        t.tracks()[0].predicted_box()
+    };
+    let b = grown(Some(1.6));
+    assert_eq!(b, grown(None));
+    assert!(b.w > 60.0, "{b:?}");
 }

@@ -178,6 +178,13 @@ pub struct AppearanceConfig {
     /// caught early, before its shrinking box drags the motion filter; a whole view taken for
     /// partial (an eroded mask) costs little, its completion keeps its centre.
     pub whole_ratio: f64,
+    /// A view whose box exceeds this multiple of its track's predicted box, and covers most
+    /// of the predicted box of another identified track that nothing matched, is taken as
+    /// merged with that neighbour by the detector (two touching shapes in one mask or box):
+    /// it keeps the track alive, but, like a sliver, it does not move the motion filter or
+    /// the reference appearance, whose place and look it misreports; when the two part, each
+    /// track is still where its own shape is. `None`: every view is trusted. Default `None`.
+    pub merged_ratio: Option<f64>,
 }
 
 impl Default for AppearanceConfig {
@@ -201,6 +208,7 @@ impl Default for AppearanceConfig {
             ambiguity: 0.2,
             refresh: 60,
             whole_ratio: 0.85,
+            merged_ratio: None,
         }
     }
 }
@@ -233,6 +241,11 @@ impl AppearanceConfig {
         let r = self.whole_ratio;
         if !(r.is_finite() && (0.0..=1.0).contains(&r)) {
             return Err(("appearance.whole_ratio", r, "must be in [0, 1]"));
+        }
+        if let Some(m) = self.merged_ratio {
+            if !(m.is_finite() && m > 1.0) {
+                return Err(("appearance.merged_ratio", m, "must be finite and > 1"));
+            }
         }
         Ok(())
     }

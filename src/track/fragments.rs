@@ -5,16 +5,20 @@
 //! merged (mask union) before the track is updated, and the fragment starts no track of its
 //! own.
 //!
+//! The opposite damage, two touching shapes in one detection, is recognised by
+//! [`merged_views`] (see [`AppearanceConfig::merged_ratio`]): the track that takes such a
+//! view is not moved by it.
+//!
 //! [`Config::merge_fragments`]: super::Config::merge_fragments
 
 use std::borrow::Cow;
 
 use super::associate::{Edge, Pair};
-use super::features::FeatureExtractor;
+use super::features::{AppearanceConfig, FeatureExtractor};
 use super::lifecycle::Track;
 use super::prepare::Prepared;
 use super::TrackError;
-use crate::frame::{Detection, Frame, Mask};
+use crate::frame::{Detection, Frame, Mask, TrackState};
 
 /// Largest gap, in pixels, between the shells of a detection and a fragment merged into it:
 /// the pieces of one split mask touch, up to the detector's morphology (1–2 px).
@@ -27,6 +31,47 @@ const MIN_INSIDE: f64 = 0.8;
 /// The merged area may exceed the track's reference area by at most this factor: two pieces
 /// of one shape add up to about the shape (plus dilation), a neighbour would add much more.
 const MAX_UNION_RATIO: f64 = 1.3;
+
+/// A merged view covers at least this fraction of the other track's predicted box: two
+/// touching shapes in one detection, not a neighbour grazed by a large box.
+const MERGED_COVER: f64 = 0.5;
+
+/// Which of `matches` took a view the detector merged with a neighbour's: the detection's
+/// box is more than [`AppearanceConfig::merged_ratio`] times the track's predicted box, and
+/// it covers most of the predicted box of another identified track that no match took (the
+/// neighbour whose shape went into it). None without a ratio.
+pub(crate) fn merged_views(
+    tracks: &[Track],
+    matches: &[Pair],
+    dets: &[Prepared<'_>],
+    config: &AppearanceConfig,
+) -> Vec<bool> {
+    let Some(ratio) = config.merged_ratio else {
+        return vec![false; matches.len()];
+    };
+    let mut taken = vec![false; tracks.len()];
+    for m in matches {
+        if let Some(t) = taken.get_mut(m.track) {
+            *t = true;
+        }
+    }
+    matches
+        .iter()
+        .map(|m| {
+            let (Some(d), Some(t)) = (dets.get(m.det), tracks.get(m.track)) else {
+                return false;
+            };
+            let b = &d.det.bbox;
+            b.area() > ratio * t.predicted_box().area()
+                && tracks.iter().zip(&taken).any(|(o, &taken)| {
+                    !taken
+                        && o.id().is_some()
+                        && o.state() != TrackState::Removed
+                        && o.predicted_box().ioa(b) >= MERGED_COVER
+                })
+        })
+        .collect()
+}
 
 /// What the merge reads from the tracker.
 pub(crate) struct Merge<'x> {

@@ -327,13 +327,17 @@ impl Track {
     /// A match in tracker frame `frame` with detection `det` (and its `features`): the motion
     /// filter is corrected (with the amodal box of a partial mask view, not at all with a
     /// sliver, see [`Config::amodal`]), the reference size and appearance follow the view, and
-    /// the counters restart. The state is left to [`Track::confirm`] / [`Track::found`].
+    /// the counters restart; a view `merged` with a neighbour's (see
+    /// [`AppearanceConfig::merged_ratio`](super::AppearanceConfig::merged_ratio)) corrects
+    /// neither the filter nor the reference appearance. The state is left to
+    /// [`Track::confirm`] / [`Track::found`].
     pub(crate) fn hit(
         &mut self,
         det: &Detection,
         features: &Features,
         frame: u32,
         cfg: &Config,
+        merged: bool,
         fit: &mut NoiseFit,
     ) -> Result<(), MotionError> {
         let area = features.area;
@@ -376,7 +380,10 @@ impl Track {
             && ratio < cfg.sliver_ratio
             && self.misses == 0
             && self.hits >= cfg.confirm_hits();
-        if !sliver {
+        // A view the detector merged with a neighbour is as little news of where the shape is
+        // (and of its size and look): following it drags the track towards the neighbour, and
+        // when the two part, the tracks swap.
+        if !sliver && !merged {
             self.motion.update(&z)?;
         }
         self.anchor = self.motion.project();
@@ -391,7 +398,7 @@ impl Track {
             (self.ref_area, self.ref_size) = self.sizes.reference();
         }
         if let Some(a) = &features.appearance {
-            self.set_appearance(a.clone(), whole);
+            self.set_appearance(a.clone(), whole && !merged);
         }
         let filter = self.smoother_box(det);
         if let Some(e) = &mut self.estimate {

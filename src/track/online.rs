@@ -22,10 +22,10 @@
 //! - **associate** ([`super::associate`]): the stages [`stages`] builds from the config, run
 //!   in turn, each an optimal assignment; the re-identification stage scores its pairs when
 //!   its turn comes (describing its detections then).
-//! - **merge fragments** (`fragments`): a detector-split shape is put back together
-//!   before its track is updated.
+//! - **merge fragments** (`fragments`): a detector-split shape is put back together.
 //! - **update matched**: `Track::hit` for every match (amodal completion, filter, sizes,
-//!   appearance); tentative tracks with enough hits are confirmed and get an id (or, with
+//!   appearance; not the filter for a view merged with a neighbour's, `fragments`); tentative
+//!   tracks with enough hits are confirmed and get an id (or, with
 //!   [`Config::reid_at_confirmation`], a lost track they re-identify takes them over,
 //!   `Track::absorb`); lost tracks are re-identified under their old id.
 //! - **refresh appearance**: matched tracks' appearance is taken now when it will be needed
@@ -45,10 +45,9 @@
 //! pass's job.
 //!
 //! **Bad input.** Non-finite or negative boxes and scores are typed errors
-//! ([`TrackError::InvalidDetection`]); a frame whose size differs from the previous frames' is
-//! [`TrackError::FrameSize`] (start a new tracker for a new video size); a mask reaching
-//! outside the frame is clipped to it, and a mask that is empty (or empty once clipped) is
-//! dropped like a zero-area box. None of these change the tracker's state.
+//! ([`TrackError::InvalidDetection`]), so is a frame whose size differs from the previous
+//! frames' ([`TrackError::FrameSize`]: start a new tracker for a new video size); a mask is
+//! clipped to the frame, and dropped like a zero-area box if empty. None change the state.
 
 use std::borrow::Cow;
 use std::sync::Arc;
@@ -62,7 +61,7 @@ use super::cost::{CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::estimate::NoiseFit;
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
-use super::fragments::{merge_fragments, Merge};
+use super::fragments::{merge_fragments, merged_views, Merge};
 use super::hindsight::Removed;
 use super::lifecycle::{two_mut, BoxMotion, Track};
 use super::prepare::{check_frame_size, kept, prepare, shape_of, validate, Prepared};
@@ -524,7 +523,8 @@ impl Tracker {
         let report = self.config.report_tentative;
         let mut matched = vec![false; self.tracks.len()];
         let mut confirming = Vec::new();
-        for m in matches {
+        let merged = merged_views(&self.tracks, matches, dets, &self.config.appearance);
+        for (m, merged) in matches.iter().zip(merged) {
             let (Some(d), true) = (dets.get(m.det), m.track < self.tracks.len()) else {
                 continue;
             };
@@ -533,7 +533,8 @@ impl Tracker {
             if t.id().is_some() {
                 self.gaps.closed(t.misses());
             }
-            t.hit(&d.det, &d.features, frame, &self.config, &mut self.noise)?;
+            let cfg = &self.config;
+            t.hit(&d.det, &d.features, frame, cfg, merged, &mut self.noise)?;
             let enough = match self.config.birth_evidence {
                 Some(low) => {
                     let w = if d.det.score >= self.thresholds.birth {
@@ -585,7 +586,8 @@ impl Tracker {
                     matched[lost] = true;
                     let (l, newer) = two_mut(&mut self.tracks, lost, m.track);
                     self.gaps.closed(l.misses());
-                    l.hit(&d.det, &d.features, frame, &self.config, &mut self.noise)?;
+                    let cfg = &self.config;
+                    l.hit(&d.det, &d.features, frame, cfg, false, &mut self.noise)?;
                     l.absorb(newer);
                     lost
                 }
