@@ -381,8 +381,8 @@ impl Track {
             && self.misses == 0
             && self.hits >= cfg.confirm_hits();
         // A view the detector merged with a neighbour is as little news of where the shape is
-        // (and of its size and look): following it drags the track towards the neighbour, and
-        // when the two part, the tracks swap.
+        // (or of its look): following it drags the track towards the neighbour, and when the
+        // two part, the tracks swap. The sizes still take it (a median, robust to a few).
         if !sliver && !merged {
             self.motion.update(&z)?;
         }
