@@ -980,3 +980,128 @@ fn a_throwing_progress_callback_is_an_error_and_leaves_the_tracker_usable() {
         );
     }
 }
+
+// ------------------------------------------------------------------------------------------
+// Moving-camera detector and camera judge
+
+/// Paints the frame `buf` holds the way JS does (through a view on wasm memory): a blocky
+/// grey texture seen from a camera shifted by `pan` pixels to the right, and a white square
+/// at `square` (top-left) when given.
+fn paint(buf: &FrameBuffer, pan: i32, square: Option<(i32, i32)>) {
+    let (w, h) = (buf.width() as i32, buf.height() as i32);
+    let mut px = vec![255u8; buf.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let (bx, by) = ((x + pan).div_euclid(8) as u32, y.div_euclid(8) as u32);
+            let mut v = (bx.wrapping_mul(73_856_093) ^ by.wrapping_mul(19_349_663)) % 200;
+            let inside =
+                |(sx, sy): (i32, i32)| (sx..sx + 24).contains(&x) && (sy..sy + 24).contains(&y);
+            if square.is_some_and(inside) {
+                v = 255;
+            }
+            let i = 4 * (y * w + x) as usize;
+            px[i..i + 3].fill(v as u8);
+        }
+    }
+    // The view is made after the Vec: allocating may grow (and detach) wasm memory.
+    let mem: js_sys::WebAssembly::Memory = wasm_bindgen::memory().dyn_into().unwrap();
+    js_sys::Uint8Array::new_with_byte_offset_and_length(
+        &mem.buffer(),
+        buf.ptr() as u32,
+        buf.len() as u32,
+    )
+    .copy_from(&px);
+}
+
+#[wasm_bindgen_test]
+fn camera_judge_tells_a_still_camera_from_a_panning_one() {
+    for (pan_per_frame, moves) in [(0, false), (4, true)] {
+        let buf = FrameBuffer::new(160.0, 120.0).unwrap();
+        let mut judge = CameraJudge::new();
+        assert_eq!(judge.moving(), None, "no pair yet");
+        for n in 0..5 {
+            paint(&buf, n * pan_per_frame, None);
+            judge.observe(&buf).unwrap();
+        }
+        assert_eq!(judge.pairs(), 4);
+        assert_eq!(judge.moving(), Some(moves), "pan {pan_per_frame} px/frame");
+    }
+    // Another frame size is an error naming both sizes, and is not looked at.
+    let mut judge = CameraJudge::new();
+    let buf = FrameBuffer::new(160.0, 120.0).unwrap();
+    paint(&buf, 0, None);
+    judge.observe(&buf).unwrap();
+    let other = FrameBuffer::new(80.0, 60.0).unwrap();
+    let msg = error_message(judge.observe(&other).err().unwrap());
+    assert!(msg.contains("80x60") && msg.contains("160x120"), "{msg}");
+    assert_eq!(judge.pairs(), 0);
+}
+
+#[wasm_bindgen_test]
+fn moving_detector_learns_then_finds_an_object_while_the_camera_pans() {
+    let mut det = MovingDetector::new(None).unwrap();
+    assert_eq!(det.warmup_frames(), 3, "min_age's default");
+    assert!(det.learning());
+    assert_eq!(det.camera_shift(), None);
+    let buf = FrameBuffer::new(160.0, 120.0).unwrap();
+    let mut found = Vec::new();
+    for n in 0..12 {
+        // The camera pans 2 px a frame; the square crosses the view at 6 px a frame.
+        paint(&buf, 2 * n, Some((20 + 6 * n, 48)));
+        found.push(det.detect(&buf).unwrap().len());
+        if n == 0 {
+            assert_eq!((det.warmup_seen(), det.learning()), (1, true));
+        }
+    }
+    assert_eq!(det.resets(), 0, "the pan was followed");
+    assert!(!det.learning());
+    assert_eq!(det.warmup_seen(), 3);
+    let shift = det.camera_shift().expect("a motion estimate");
+    assert!((shift - 2.0).abs() < 0.5, "camera shift {shift} px");
+    assert_eq!(&found[..3], &[0, 0, 0], "nothing while learning: {found:?}");
+    assert!(
+        found[4..].iter().any(|&n| n > 0),
+        "the square is found: {found:?}"
+    );
+
+    // A frame of another size is an error, not a trap; after `reset` it starts a new model.
+    let small = FrameBuffer::new(80.0, 60.0).unwrap();
+    let msg = error_message(det.detect(&small).err().unwrap());
+    assert!(msg.contains("80x60") && msg.contains("160x120"), "{msg}");
+    det.reset();
+    assert!(det.learning() && det.warmup_seen() == 0);
+    assert_eq!(det.detect(&small).unwrap().len(), 0);
+    assert_eq!(det.warmup_seen(), 1);
+}
+
+#[wasm_bindgen_test]
+fn moving_detector_settings_are_checked_and_name_their_field() {
+    for (opts, field) in [
+        (serde_json::json!({ "threshold": 300 }), "threshold"),
+        (serde_json::json!({ "treshold": 5 }), "treshold"),
+        (serde_json::json!({ "min_age": -1 }), "min_age"),
+        (serde_json::json!({ "work_side": 8 }), "work_side"),
+        (
+            serde_json::json!({ "refine": { "max_sid": 40 } }),
+            "max_sid",
+        ),
+        (serde_json::json!({ "refine": [1, 2] }), "refine"),
+        (serde_json::json!({ "alpha": "fast" }), "alpha"),
+    ] {
+        let msg = error_message(MovingDetector::new(Some(settings(&opts))).err().unwrap());
+        assert!(msg.contains(field), "{opts}: {msg}");
+    }
+    let not_object = MovingDetector::new(Some(settings(&serde_json::json!([1]))));
+    assert!(error_message(not_object.err().unwrap()).contains("plain object"));
+    for ok in [
+        serde_json::json!({}),
+        serde_json::json!({ "refine": null, "min_age": 5 }),
+        serde_json::json!({ "refine": { "iterations": 1 }, "max_blobs": 2 }),
+    ] {
+        let det = MovingDetector::new(Some(settings(&ok)));
+        assert!(det.is_ok(), "{ok}");
+        if ok["min_age"] == 5 {
+            assert_eq!(det.unwrap().warmup_frames(), 5);
+        }
+    }
+}

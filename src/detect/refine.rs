@@ -30,8 +30,9 @@ use crate::frame::{BBox, Detection, Frame, Mask, Point};
 use serde::{Deserialize, Serialize};
 
 /// Settings of the box refinement.
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct RefineConfig {
     /// Longest side of the working crop in pixels, ring included (the per-box cost bound).
     /// Default `80`.

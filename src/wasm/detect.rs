@@ -1,7 +1,10 @@
-//! Detections: lists handed in by detectors written in JS, and the background detector.
+//! Detections: lists handed in by detectors written in JS, the background detector, the
+//! moving-camera detector, and the judge that tells the two kinds of footage apart.
 
 use super::*;
-use crate::detect::{BackgroundSubtractor, Detector};
+use crate::detect::{
+    BackgroundSubtractor, CameraJudge as CoreJudge, DetectError, Detector, MovingCameraDetector,
+};
 use crate::frame::{BBox, Detection, Mask};
 use serde::{Deserialize, Serialize};
 use tsify::{Ts, Tsify};
@@ -187,5 +190,138 @@ impl BackgroundDetector {
     #[wasm_bindgen(getter, js_name = warmupFrames)]
     pub fn warmup_frames(&self) -> u32 {
         self.inner.warmup().1
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Moving-camera detector
+
+/// Background subtraction for a moving camera: the camera's motion between frames is
+/// estimated and compensated, moving blobs are refined into masks (see the core's
+/// `MovingCameraDetector`). No model weights.
+///
+/// Its model needs `min_age` frames of history before anything can be foreground, after the
+/// first frame and again after each re-initialisation (a cut, a jump the motion estimate could
+/// not follow): `learning`, `warmupSeen` and `warmupFrames` say where it is, so a page can
+/// explain frames without detections.
+#[wasm_bindgen]
+pub struct MovingDetector {
+    inner: MovingCameraDetector,
+}
+
+#[wasm_bindgen]
+impl MovingDetector {
+    /// A detector with the core's defaults, or the settings given (`MovingConfig`'s fields;
+    /// missing ones keep their defaults, unknown ones are errors).
+    #[wasm_bindgen(constructor)]
+    pub fn new(config: Option<MovingSettings>) -> Result<MovingDetector, JsValue> {
+        let cfg = settings::moving_config(config.as_ref())?;
+        Ok(MovingDetector {
+            inner: MovingCameraDetector::new(cfg).map_err(js_error)?,
+        })
+    }
+
+    /// Detects the moving objects of the frame in `buf` (frames must come in order, all of
+    /// the size of the first: another size is an error until `reset`).
+    pub fn detect(&mut self, buf: &FrameBuffer) -> Result<Detections, JsValue> {
+        let frame = buf.frame()?;
+        let inner = self.inner.detect(&frame).map_err(js_error)?;
+        Ok(Detections { inner })
+    }
+
+    /// Forgets the model and the frame size (e.g. after a cut or a size change).
+    pub fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// Frames of history the model holds, up to `warmupFrames` (detections can start on the
+    /// frame after it reaches that).
+    #[wasm_bindgen(getter, js_name = warmupSeen)]
+    pub fn warmup_seen(&self) -> u32 {
+        self.inner.warmup().0
+    }
+
+    /// Frames of history the model needs before it detects (`min_age`).
+    #[wasm_bindgen(getter, js_name = warmupFrames)]
+    pub fn warmup_frames(&self) -> u32 {
+        self.inner.warmup().1
+    }
+
+    /// Whether the model is still learning (nothing is detected meanwhile).
+    #[wasm_bindgen(getter)]
+    pub fn learning(&self) -> bool {
+        let (seen, needed) = self.inner.warmup();
+        seen < needed
+    }
+
+    /// How often the model started over because the camera's motion could not be followed.
+    #[wasm_bindgen(getter)]
+    pub fn resets(&self) -> u32 {
+        u32::try_from(self.inner.resets()).unwrap_or(u32::MAX)
+    }
+
+    /// How far the camera moved between the last two frames: the largest displacement of a
+    /// frame corner, in frame pixels; `undefined` when it was not estimated (first frame, a
+    /// failed estimate).
+    #[wasm_bindgen(getter, js_name = cameraShift)]
+    pub fn camera_shift(&self) -> Option<f64> {
+        let scale = self.inner.scale() as f64;
+        self.inner.last_motion().map(|m| m.displacement * scale)
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Camera judge
+
+/// Tells a static camera from a moving one, from the motion between the first frames (the
+/// median corner displacement against `MOVING_CAMERA_PX` frame pixels per frame): which of
+/// the two background detectors fits the footage.
+#[wasm_bindgen]
+pub struct CameraJudge {
+    inner: CoreJudge,
+    /// Size of the first frame: the core ignores frames of another size; the binding says so.
+    size: Option<(u32, u32)>,
+}
+
+#[wasm_bindgen]
+impl CameraJudge {
+    /// A judge with no frames yet.
+    #[wasm_bindgen(constructor)]
+    #[allow(clippy::new_without_default)] // a JS class: `new CameraJudge()` is its API
+    pub fn new() -> CameraJudge {
+        CameraJudge {
+            inner: CoreJudge::new(),
+            size: None,
+        }
+    }
+
+    /// Looks at the next frame. A frame of another size than the first is an error (and is
+    /// not looked at).
+    pub fn observe(&mut self, buf: &FrameBuffer) -> Result<(), JsValue> {
+        let frame = buf.frame()?;
+        let (w, h) = (frame.width(), frame.height());
+        let (ew, eh) = *self.size.get_or_insert((w, h));
+        if (ew, eh) != (w, h) {
+            return Err(js_error(DetectError::SizeChanged {
+                expected_width: ew,
+                expected_height: eh,
+                width: w,
+                height: h,
+            }));
+        }
+        self.inner.observe(&frame);
+        Ok(())
+    }
+
+    /// Frame pairs measured so far (one less than the frames observed).
+    #[wasm_bindgen(getter)]
+    pub fn pairs(&self) -> u32 {
+        u32::try_from(self.inner.pairs()).unwrap_or(u32::MAX)
+    }
+
+    /// Whether the camera moves: `undefined` before two frames have been observed.
+    #[wasm_bindgen(getter)]
+    pub fn moving(&self) -> Option<bool> {
+        self.inner.moving()
     }
 }

@@ -14,7 +14,7 @@
 //! One module per area, each small (a test keeps every file under 500 lines); everything
 //! public is re-exported here, so the JS API and `shapetrack::wasm::*` are one flat namespace:
 //! `frame` (frame buffers, boxes, masks), `annotations` (file formats), `detect` (detections,
-//! background detector), `settings` (settings objects: partial JSON over the core's config
+//! background and moving-camera detectors, camera judge), `settings` (settings objects: partial JSON over the core's config
 //! types, typed from them), `offline` (the offline pass' progress and result), `tracker`, `synth` (the demo scene), `eval` (metrics), `follow` (following one given shape, keyframe interpolation), and `error` (how
 //! failures become JS `Error`s; not exported).
 
@@ -36,7 +36,8 @@ pub use follow::*;
 pub use frame::*;
 pub use offline::*;
 pub use settings::{
-    BackgroundSettings, EvalSettings, FollowSettings, OfflineSettings, TrackerSettings,
+    BackgroundSettings, EvalSettings, FollowSettings, MovingSettings, OfflineSettings,
+    TrackerSettings,
 };
 pub use synth::*;
 pub use tracker::*;

@@ -5,6 +5,7 @@
 
 use super::*;
 use crate::detect::background::BackgroundConfig;
+use crate::detect::MovingConfig;
 use crate::eval::EvalConfig;
 use crate::follow::FollowConfig;
 use crate::track::offline::OfflineConfig;
@@ -33,6 +34,8 @@ export type OfflineSettings = { fps: number; width?: number; height?: number } &
 >;
 /** The background detector's settings over `BackgroundConfig`'s defaults. */
 export type BackgroundSettings = DeepPartial<BackgroundConfig>;
+/** The moving-camera detector's settings over `MovingConfig`'s defaults. */
+export type MovingSettings = DeepPartial<MovingConfig>;
 /** The follower's settings over `FollowConfig`'s defaults. */
 export type FollowSettings = DeepPartial<FollowConfig>;
 /** How `evaluate` scores, over its defaults: box IoU at 0.5, every record as given
@@ -52,6 +55,9 @@ extern "C" {
     /// The background detector's settings (`BackgroundSettings`).
     #[wasm_bindgen(typescript_type = "BackgroundSettings")]
     pub type BackgroundSettings;
+    /// The moving-camera detector's settings (`MovingSettings`).
+    #[wasm_bindgen(typescript_type = "MovingSettings")]
+    pub type MovingSettings;
     /// The follower's settings (`FollowSettings`).
     #[wasm_bindgen(typescript_type = "FollowSettings")]
     pub type FollowSettings;
@@ -180,6 +186,11 @@ pub(super) fn background_config(
     v: Option<&BackgroundSettings>,
 ) -> Result<BackgroundConfig, JsValue> {
     overlay(BackgroundConfig::default(), v.map(|v| v.as_ref()))
+}
+
+/// The moving-camera detector's config from its settings object.
+pub(super) fn moving_config(v: Option<&MovingSettings>) -> Result<MovingConfig, JsValue> {
+    overlay(MovingConfig::default(), v.map(|v| v.as_ref()))
 }
 
 /// The follower's config from its settings object.

@@ -102,7 +102,7 @@ test('the SSD detector finds the DAVIS car on most frames and the tracker keeps 
 
   const options = await page.$$eval('#detector option', (os) => os.map((o) => /** @type {HTMLOptionElement} */ (o).value));
   assert.ok(options.includes('ssd') && options.includes('ssd-moving'), `picker lists the SSD detector (${options})`);
-  assert.equal(await page.inputValue('#detector'), 'background', 'the background subtractor stays the default');
+  assert.equal(await page.inputValue('#detector'), 'auto', 'the automatic choice (background or moving camera) stays the default');
   // The camera pans: every box is its own mask.
   await page.selectOption('#detector', 'ssd-moving');
   await recordTimings(page);

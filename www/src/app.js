@@ -76,7 +76,15 @@ export class App {
     this.mode = 'online';
     /** @type {'realtime' | 'max'} */
     this.speed = 'realtime';
-    this.detector = 'background';
+    /**
+     * The detector picked in the menu. `auto` (the default) judges videos, image sequences and
+     * the webcam from their first frames (static camera: background detector; moving: the
+     * moving-camera one); the synthetic demo keeps the background detector, whose figures on
+     * it the docs quote.
+     */
+    this.detector = 'auto';
+    /** @type {import('./worker/detectors.js').Choice | null} what `auto` chose for this source */
+    this.detectorChoice = null;
     /** @type {import('../pkg/shapetrack.js').ScenePreset} the synthetic scene the demo opens */
     this.scene = 'demo';
     /**
@@ -180,7 +188,7 @@ export class App {
     this.status(src ? `opening ${src.name}…` : 'starting the demo scene…');
     const opened = await this.worker.open({
       source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: this.scene },
-      detector: this.detector,
+      detector: this.detectorFor(src),
       ...(this.tracker ? { tracker: this.tracker } : {}),
       ...(this.offlineSettings ? { offlineSettings: this.offlineSettings } : {}),
       offline: src?.kind !== 'webcam',
@@ -195,6 +203,8 @@ export class App {
       fps: opened.fps,
     };
     this.source = source;
+    this.detectorChoice = null;
+    this.warming = false;
     // A detector with classes names them: the overlay shows them and exports carry them.
     if (opened.classes.length) this.labels = opened.classes.flatMap((name, i) => (name ? [{ class: i, name }] : []));
     this.session.open({ frames: source.frames ?? 0, offlineCapable: opened.offline });
@@ -423,7 +433,12 @@ export class App {
     this.fps.tick(performance.now());
     this.lastTimings = res.timings;
     this.lastDetections = res.detections;
+    const chose = res.choice !== null && res.choice.name !== this.detectorChoice?.name;
+    if (chose) this.detectorChoice = res.choice;
+    // The warm-up message names the choice; a chosen detector that needs no more learning
+    // says it detects.
     this.warmupStatus(res.warmup);
+    if (chose && !this.warming) this.status(this.choiceNote(`detecting from frame ${res.frame}`));
     if (res.groundTruth && this.gt) {
       for (const g of res.groundTruth) this.gt.add(g);
     }
@@ -435,19 +450,45 @@ export class App {
   }
 
   /**
-   * While the detector learns the scene (a background model's first frames detect nothing),
-   * the status line says so, and says when it is done: empty frames then are not a failure.
-   * @param {{ seen: number, total: number } | null} w
+   * While the detector learns the scene (a background model's first frames detect nothing;
+   * the automatic detector judges the camera first), the status line says so, and says when
+   * it is done: empty frames then are not a failure.
+   * @param {import('./worker/detectors.js').Warmup | null} w
    */
   warmupStatus(w) {
     if (!w) return;
+    const what = {
+      background: ['learning the background', 'background learnt'],
+      moving: ['learning the scene behind the moving camera', 'scene learnt'],
+      judge: ['judging whether the camera moves', 'camera judged'],
+    }[w.what ?? 'background'];
     if (w.seen < w.total) {
-      this.status(`learning the background: ${w.seen}/${w.total} frames (nothing is detected until it is learnt)…`);
+      this.status(this.choiceNote(`${what[0]}: ${w.seen}/${w.total} frames (nothing is detected until it is learnt)…`));
       this.warming = true;
     } else if (this.warming) {
       this.warming = false;
-      this.status(`background learnt from ${w.total} frames: detecting`);
+      this.status(this.choiceNote(`${what[1]} from ${w.total} frames: detecting`));
     }
+  }
+
+  /**
+   * `msg` after what the automatic detector chose, once it has ("camera moves: moving-camera
+   * detector · …"), so a later warm-up message does not hide the choice.
+   * @param {string} msg
+   */
+  choiceNote(msg) {
+    const c = this.detectorChoice;
+    return c ? `${c.why}: ${c.label} · ${msg}` : msg;
+  }
+
+  /**
+   * The detector a source gets: the menu's, except that `auto` keeps the background detector
+   * on the synthetic demo (a still camera by construction; its quality figures are the
+   * background detector's).
+   * @param {Source | AnySource | null} src null: the synthetic demo
+   */
+  detectorFor(src) {
+    return this.detector === 'auto' && (!src || src.kind === 'synth') ? 'background' : this.detector;
   }
 
   /** Whether the status line shows a warm-up message. */
@@ -1189,7 +1230,9 @@ export class App {
     // Frames in flight finish with the old detector; the switch lands between two frames.
     const wasPlaying = this.playing;
     await this.stop();
-    const { classes } = await this.worker.setDetector(name);
+    const { classes } = await this.worker.setDetector(this.detectorFor(this.source));
+    this.detectorChoice = null;
+    this.warming = false;
     if (classes.length) this.labels = classes.flatMap((n, i) => (n ? [{ class: i, name: n }] : []));
     this.status(`detector: ${label} from frame ${this.session.processed + 1}`);
     if (wasPlaying) this.play();

@@ -107,6 +107,8 @@ function exposeForTests(app) {
       following: app.following !== null,
       tool: app.shapeTool.mode,
       status: byId('status').textContent,
+      detector: app.detector,
+      detectorChoice: app.detectorChoice?.name ?? null,
     }),
     /** Every record as the table holds it (frame, id, bbox, ...). */
     records: () => app.model.table.all(),

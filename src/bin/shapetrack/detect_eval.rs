@@ -16,7 +16,7 @@
 //! Speed: frames per second of each detector's own work (decoding excluded), one thread.
 
 use crate::detect::{Kind, Runner};
-use shapetrack::detect::{refine_box, RefineConfig};
+use shapetrack::detect::{refine_box, MovingCameraDetector, MovingConfig, RefineConfig};
 use shapetrack::io::{image_files, read_rgb, IoError};
 use shapetrack::{Frame, Mask};
 use std::path::{Path, PathBuf};
@@ -56,6 +56,10 @@ pub struct Args {
     /// experiments; the table records the defaults when absent.
     #[arg(long)]
     refine: Option<String>,
+    /// Moving-camera detector settings as JSON over the defaults (e.g. `{"threshold": 24}`),
+    /// for experiments; the `moving` column uses the defaults when absent.
+    #[arg(long)]
+    moving: Option<String>,
     /// Only these sequences (comma-separated names); all when absent.
     #[arg(long, value_delimiter = ',')]
     sequences: Vec<String>,
@@ -134,10 +138,13 @@ fn score(
     seq: &Seq,
     m: Method,
     refine: &RefineConfig,
+    moving: &MovingConfig,
 ) -> Result<(f64, f64, String), Box<dyn std::error::Error>> {
     let mut runner = match m {
         Method::Background => Some(Runner::new(Kind::Background, None)?),
-        Method::Moving => Some(Runner::new(Kind::Moving, None)?),
+        Method::Moving => Some(Runner::Moving(Box::new(MovingCameraDetector::new(
+            moving.clone(),
+        )?))),
         Method::Auto => Some(Runner::new(Kind::Auto, None)?),
         _ => None,
     };
@@ -175,6 +182,10 @@ pub fn run(args: Args) -> crate::CliResult {
         Some(j) => serde_json::from_str(j)?,
         None => RefineConfig::default(),
     };
+    let moving: MovingConfig = match &args.moving {
+        Some(j) => serde_json::from_str(j)?,
+        None => MovingConfig::default(),
+    };
     let header: Vec<&str> = args.methods.iter().map(|&m| name(m)).collect();
     let mut all_fps: Vec<(f64, usize)> = vec![(0.0, 0); args.methods.len()];
     for root in &args.davis {
@@ -187,7 +198,7 @@ pub fn run(args: Args) -> crate::CliResult {
             let seq = load(root, &dir)?;
             let mut cells = Vec::new();
             for (k, &m) in args.methods.iter().enumerate() {
-                let (j, secs, chose) = score(&seq, m, &refine)?;
+                let (j, secs, chose) = score(&seq, m, &refine, &moving)?;
                 means[k] += j;
                 all_fps[k].0 += secs;
                 all_fps[k].1 += seq.frames.len();

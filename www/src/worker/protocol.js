@@ -48,9 +48,11 @@
  *   detections: number,
  *   groundTruth: TrackRecord[] | null,
  *   timings: Timings,
- *   warmup: { seen: number, total: number } | null,
+ *   warmup: import('./detectors.js').Warmup | null,
+ *   choice: import('./detectors.js').Choice | null,
  * }} StepResult  `warmup`: how far the detector's model has learnt the scene (a background
- *   model's first frames detect nothing); null for detectors that need no warm-up
+ *   model's first frames detect nothing); null for detectors that need no warm-up; `choice`:
+ *   the detector the automatic one chose, once it has
  *
  * @typedef {import('../../pkg/shapetrack.js').FollowStepJs & { frame: number }} FollowStep
  *   the follower's answer for one frame
@@ -124,8 +126,9 @@ export class WorkerClient {
   }
   /**
    * Switches the open session's detector from the next frame on: the tracker and its tracks
-   * stay (its settings are the ones chosen at open), the new detector starts fresh (a
-   * background model learns again).
+   * stay (its settings are the ones chosen at open, unless it has reported no shape yet: then
+   * it takes the new detector's), the new detector starts fresh (a background model learns
+   * again).
    * @param {string} detector
    * @param {Record<string, unknown>} [detectorOptions]
    * @returns {Promise<{ classes: string[] }>}

@@ -29,8 +29,16 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
  *   follower: import('../../pkg/shapetrack.js').Follower | null,
  *   followTo: number,
  *   cache: Map<number, Uint8ClampedArray>,
+ *   trackerSettings: {
+ *     detector: import('../../pkg/shapetrack.js').TrackerSettings | undefined,
+ *     page: import('../../pkg/shapetrack.js').TrackerSettings | undefined,
+ *     offline: import('../../pkg/shapetrack.js').OfflineSettings | null,
+ *   },
+ *   reported: boolean,
  * }} Session  `follower`: the shape being followed (`followStart`); `followTo`: the frame its
- *   leg ends at; `cache`: synthetic frames rendered ahead of a backward leg (see `sceneFrame`)
+ *   leg ends at; `cache`: synthetic frames rendered ahead of a backward leg (see `sceneFrame`);
+ *   `trackerSettings`: what the tracker was built from (the detector's settings, the page's
+ *   over them, the offline options); `reported`: whether the tracker has reported a shape
  */
 
 /** @type {Session | null} */
@@ -140,7 +148,8 @@ async function open(req) {
   if (req.source.kind === 'frames') fps = req.source.fps || fps;
   // With an end to the video the tracker keeps what the offline pass needs (appearance
   // snapshots), so the page may switch to offline at any time before the end.
-  const tracker = new core.Tracker({ ...detector.tracker, ...req.tracker }, req.offline ? { ...req.offlineSettings, fps } : null);
+  const trackerSettings = { detector: detector.tracker, page: req.tracker, offline: req.offline ? { ...req.offlineSettings, fps } : null };
+  const tracker = new core.Tracker({ ...trackerSettings.detector, ...trackerSettings.page }, trackerSettings.offline);
   session = {
     core,
     memory,
@@ -155,6 +164,8 @@ async function open(req) {
     follower: null,
     followTo: 0,
     cache: new Map(),
+    trackerSettings,
+    reported: false,
   };
   return {
     width,
@@ -276,8 +287,15 @@ async function step(frame, bitmap, display) {
   const dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(out);
   const t2 = performance.now();
   const detections = dets.len;
-  const shapes = s.tracker.update(frame, s.buffer, dets);
-  dets.free();
+  /** @type {import('../../pkg/shapetrack.js').Shapes} */
+  let shapes;
+  try {
+    if (!s.reported && s.detector.tracker !== s.trackerSettings.detector) rebuildTracker(s);
+    shapes = s.tracker.update(frame, s.buffer, dets);
+  } finally {
+    dets.free();
+  }
+  s.reported ||= shapes.length > 0;
   const t3 = performance.now();
   const groundTruth = sceneFrame ? sceneFrame.groundTruth() : null;
   sceneFrame?.free();
@@ -294,7 +312,32 @@ async function step(frame, bitmap, display) {
     groundTruth,
     timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
     warmup: s.detector.warmup?.() ?? null,
+    choice: s.detector.choice?.() ?? null,
   };
+}
+
+/**
+ * Rebuilds the tracker with the detector's current settings (the page's still over them),
+ * caught up to the frames tracked so far with empty frames. Only while no shape has been
+ * reported: then nothing is lost (the automatic detector reports nothing until it has chosen;
+ * a detector picked before the first track takes its own settings).
+ * @param {Session} s
+ */
+function rebuildTracker(s) {
+  const settings = { ...s.trackerSettings, detector: s.detector.tracker };
+  const tracker = new s.core.Tracker({ ...settings.detector, ...settings.page }, settings.offline);
+  const none = s.core.Detections.fromLists({});
+  try {
+    for (let k = 1; k <= s.tracker.frame; k++) tracker.updateDetections(k, none);
+  } catch (e) {
+    tracker.free();
+    throw e;
+  } finally {
+    none.free();
+  }
+  s.tracker.free();
+  s.tracker = tracker;
+  s.trackerSettings = settings;
 }
 
 /** Progress reports are posted at most this often (ms), and at every change of phase. */
