@@ -608,9 +608,9 @@ impl MovingCameraDetector {
             // the model nearby and the model's pixel in the frame nearby. An object's flat
             // colour over a textured background (or the texture it uncovers, where the model
             // still holds the object) passes only one of the two.
-            let d = near(&cur.v, &bg, i).max(near(&bg, &cur.v, i));
             let grown = age[i] >= min_age;
-            let f = grown && d > t;
+            // Pixels without history cannot be foreground: skip their neighbourhood search.
+            let f = grown && near(&cur.v, &bg, i).max(near(&bg, &cur.v, i)) > t;
             with_history += grown as usize;
             fg_count += f as usize;
             self.fg[i] = f as u8;
