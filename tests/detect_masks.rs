@@ -214,6 +214,54 @@ fn a_fine_texture_under_a_sub_pixel_pan_is_not_foreground() {
 }
 
 #[test]
+fn the_ghost_of_the_first_frames_object_is_cleared() {
+    // The camera follows the object (it stays put in the image while the textured world pans
+    // by), so the first frames' model holds the object at a spot of the world that it leaves
+    // for good: the uncovered background there differs from the model (a "ghost") until the
+    // steady-colour rule replaces it.
+    let (w, h) = (240, 160);
+    let run = |ghost_frames: u32| {
+        let mut det = MovingCameraDetector::new(MovingConfig {
+            ghost_frames,
+            ..MovingConfig::default()
+        })
+        .unwrap();
+        let (mut off, mut hits) = (0usize, 0usize);
+        for t in 0..32u32 {
+            let (ox, oy) = (3.0 * t as f64, 1.0 * t as f64);
+            let (img, gt) = render(w, h, ox, oy, (120.0 + ox, 80.0 + oy, 22.0, 15.0));
+            let dets = det.detect(&Frame::rgb(&img, w, h).unwrap()).unwrap();
+            // By frame 26 every pixel of the first frames' spot has been uncovered for 8
+            // frames or more.
+            if t < 26 {
+                continue;
+            }
+            for m in dets.iter().filter_map(|d| d.mask.as_ref()) {
+                // Mostly elsewhere than the object: the ghost's own blob.
+                off += ((m.intersection(&gt) as f64) < 0.2 * m.area() as f64) as usize;
+                hits += (m.iou(&gt) >= 0.5) as usize;
+            }
+        }
+        (off, hits, det.resets())
+    };
+    let (off, hits, resets) = run(MovingConfig::default().ghost_frames);
+    assert_eq!(resets, 0);
+    assert_eq!(
+        off, 0,
+        "detections off the object (the ghost) in the last 6 frames"
+    );
+    assert!(
+        hits >= 5,
+        "the object itself found in {hits} of the last 6 frames"
+    );
+    let (off_without, _, _) = run(0);
+    assert!(
+        off_without >= 3,
+        "without ghost removal {off_without} off-object detections: the test no longer shows what it guards"
+    );
+}
+
+#[test]
 fn a_cut_resets_the_moving_detector_without_spraying_detections() {
     let (w, h) = (200, 140);
     let mut det = MovingCameraDetector::new(MovingConfig::default()).unwrap();
