@@ -1,9 +1,10 @@
-//! A small s–t minimum cut for image grids (Dinic's algorithm, iterative, integer capacities).
+//! A small s–t minimum cut for image grids (Boykov–Kolmogorov, iterative, integer capacities).
 //!
 //! Written by hand (see ARCHITECTURE.md): the graphs here are
 //! small (a refinement crop has at most a few thousand pixels), the solver must run on
-//! `wasm32-unknown-unknown` without threads, and it must not recurse (a blocking-flow DFS can be
-//! as deep as the graph has nodes, which overflows wasm's small stack).
+//! `wasm32-unknown-unknown` without threads, and it must not recurse (a search path can be as
+//! long as the graph has nodes, which overflows wasm's small stack). The tests keep a Dinic
+//! solver as the reference it is checked against.
 
 /// Capacity that no cut will pay: hard constraints.
 pub const INFINITE: i32 = 1 << 28;
@@ -16,9 +17,14 @@ pub struct FlowGraph {
     next: Vec<u32>,
     to: Vec<u32>,
     cap: Vec<i32>,
-    level: Vec<i32>,
-    iter: Vec<u32>,
 }
+
+/// Search-tree membership of a node in Boykov–Kolmogorov.
+const FREE: u8 = 0;
+const S_TREE: u8 = 1;
+const T_TREE: u8 = 2;
+/// Parent marker of the two roots (the source and the sink).
+const ROOT: u32 = u32::MAX - 1;
 
 const NONE: u32 = u32::MAX;
 
@@ -31,8 +37,6 @@ impl FlowGraph {
             next: Vec::new(),
             to: Vec::new(),
             cap: Vec::new(),
-            level: vec![-1; n + 2],
-            iter: vec![NONE; n + 2],
         }
     }
 
@@ -76,93 +80,227 @@ impl FlowGraph {
         }
     }
 
-    fn bfs(&mut self) -> bool {
-        let (s, t) = (self.source(), self.sink());
-        self.level.iter_mut().for_each(|l| *l = -1);
-        let mut queue = std::collections::VecDeque::with_capacity(self.n + 2);
-        self.level[s] = 0;
-        queue.push_back(s);
-        while let Some(u) = queue.pop_front() {
-            let mut e = self.head[u];
-            while e != NONE {
-                let v = self.to[e as usize] as usize;
-                if self.cap[e as usize] > 0 && self.level[v] < 0 {
-                    self.level[v] = self.level[u] + 1;
-                    queue.push_back(v);
-                }
-                e = self.next[e as usize];
-            }
-        }
-        self.level[t] >= 0
-    }
-
-    /// One blocking flow along the level graph, with an explicit path stack.
-    fn blocking_flow(&mut self) -> i64 {
-        let (s, t) = (self.source(), self.sink());
-        self.iter.copy_from_slice(&self.head);
-        let mut total = 0i64;
-        let mut path: Vec<u32> = Vec::new();
-        let mut u = s;
-        loop {
-            if u == t {
-                let f = path
-                    .iter()
-                    .map(|&e| self.cap[e as usize])
-                    .min()
-                    .unwrap_or(0);
-                let mut cut_at = path.len();
-                for (i, &e) in path.iter().enumerate() {
-                    self.cap[e as usize] -= f;
-                    self.cap[(e ^ 1) as usize] += f;
-                    if self.cap[e as usize] == 0 && cut_at == path.len() {
-                        cut_at = i;
-                    }
-                }
-                total += f as i64;
-                path.truncate(cut_at);
-                u = match path.last() {
-                    Some(&e) => self.to[e as usize] as usize,
-                    None => s,
-                };
-                continue;
-            }
-            let mut advanced = false;
-            while self.iter[u] != NONE {
-                let e = self.iter[u] as usize;
-                let v = self.to[e] as usize;
-                if self.cap[e] > 0 && self.level[v] == self.level[u] + 1 {
-                    path.push(e as u32);
-                    u = v;
-                    advanced = true;
-                    break;
-                }
-                self.iter[u] = self.next[e];
-            }
-            if advanced {
-                continue;
-            }
-            // Dead end: no augmenting path leaves `u` in this phase.
-            self.level[u] = -1;
-            match path.pop() {
-                None => return total,
-                Some(e) => {
-                    let tail = self.to[(e ^ 1) as usize] as usize;
-                    self.iter[tail] = self.next[e as usize];
-                    u = tail;
-                }
-            }
-        }
-    }
-
     /// Runs the max-flow and returns, for each inner node, whether it is on the source side of
     /// the minimum cut, with the cut's value.
+    ///
+    /// The source side is the set of nodes reachable from the source in the final residual
+    /// graph: the smallest source side of any minimum cut, the same whichever maximum flow
+    /// the solver found.
+    ///
+    /// Boykov–Kolmogorov (two search trees grown from the terminals, augmenting where they
+    /// meet, orphans re-adopted; with their timestamp and distance heuristic): on the
+    /// refinement's grids, where most paths are short, it is several times faster than
+    /// Dinic's phases of breadth-first searches over the whole graph.
     pub fn min_cut(&mut self) -> (Vec<bool>, i64) {
+        let total = self.n + 2;
+        let (s, t) = (self.source(), self.sink());
+        let mut tree = vec![FREE; total];
+        let mut parent = vec![NONE; total];
+        let mut stamp = vec![0u32; total];
+        let mut dist = vec![0u32; total];
+        let mut active = std::collections::VecDeque::with_capacity(total);
+        let mut queued = vec![false; total];
+        let mut orphans: Vec<u32> = Vec::new();
+        let mut time = 1u32;
+        tree[s] = S_TREE;
+        tree[t] = T_TREE;
+        parent[s] = ROOT;
+        parent[t] = ROOT;
+        stamp[s] = time;
+        stamp[t] = time;
+        active.push_back(s as u32);
+        active.push_back(t as u32);
+        queued[s] = true;
+        queued[t] = true;
         let mut flow = 0i64;
-        while self.bfs() {
-            flow += self.blocking_flow();
+        // The tail of arc `e` (arcs come in pairs `e`, `e ^ 1`).
+        let tail = |to: &[u32], e: u32| to[(e ^ 1) as usize] as usize;
+        loop {
+            // Growth: the front active node extends its tree until the trees meet.
+            let mut meet = NONE;
+            while let Some(&p) = active.front() {
+                let p = p as usize;
+                if tree[p] == FREE {
+                    active.pop_front();
+                    queued[p] = false;
+                    continue;
+                }
+                let mut e = self.head[p];
+                while e != NONE {
+                    let ei = e as usize;
+                    let q = self.to[ei] as usize;
+                    // Residual capacity in the tree's direction: away from the source in S,
+                    // towards the sink in T.
+                    let open = if tree[p] == S_TREE {
+                        self.cap[ei] > 0
+                    } else {
+                        self.cap[ei ^ 1] > 0
+                    };
+                    if open {
+                        if tree[q] == FREE {
+                            tree[q] = tree[p];
+                            // S: the arc parent → q; T: the arc q → parent.
+                            parent[q] = if tree[p] == S_TREE { e } else { e ^ 1 };
+                            stamp[q] = stamp[p];
+                            dist[q] = dist[p] + 1;
+                            if !queued[q] {
+                                queued[q] = true;
+                                active.push_back(q as u32);
+                            }
+                        } else if tree[q] != tree[p] {
+                            // The arc from the S side to the T side.
+                            meet = if tree[p] == S_TREE { e } else { e ^ 1 };
+                            break;
+                        }
+                    }
+                    e = self.next[ei];
+                }
+                if meet != NONE {
+                    break;
+                }
+                active.pop_front();
+                queued[p] = false;
+            }
+            if meet == NONE {
+                break;
+            }
+            // Augmentation along s … tail(meet) → head(meet) … t.
+            time += 1;
+            let mut f = self.cap[meet as usize];
+            let mut v = tail(&self.to, meet);
+            while parent[v] != ROOT {
+                f = f.min(self.cap[parent[v] as usize]);
+                v = tail(&self.to, parent[v]);
+            }
+            let mut v = self.to[meet as usize] as usize;
+            while parent[v] != ROOT {
+                f = f.min(self.cap[parent[v] as usize]);
+                v = self.to[parent[v] as usize] as usize;
+            }
+            self.cap[meet as usize] -= f;
+            self.cap[(meet ^ 1) as usize] += f;
+            let mut v = tail(&self.to, meet);
+            while parent[v] != ROOT {
+                let e = parent[v] as usize;
+                self.cap[e] -= f;
+                self.cap[e ^ 1] += f;
+                let up = tail(&self.to, e as u32);
+                if self.cap[e] == 0 {
+                    parent[v] = NONE;
+                    orphans.push(v as u32);
+                }
+                v = up;
+            }
+            let mut v = self.to[meet as usize] as usize;
+            while parent[v] != ROOT {
+                let e = parent[v] as usize;
+                self.cap[e] -= f;
+                self.cap[e ^ 1] += f;
+                let up = self.to[e] as usize;
+                if self.cap[e] == 0 {
+                    parent[v] = NONE;
+                    orphans.push(v as u32);
+                }
+                v = up;
+            }
+            flow += f as i64;
+            // Adoption: each orphan looks for a new parent in its own tree whose path to
+            // the root is intact, or leaves the tree (and orphans its children).
+            while let Some(o) = orphans.pop() {
+                let o = o as usize;
+                let side = tree[o];
+                let mut best = (NONE, u32::MAX);
+                let mut e = self.head[o];
+                while e != NONE {
+                    let ei = e as usize;
+                    let q = self.to[ei] as usize;
+                    // S: the arc q → o must be open; T: the arc o → q.
+                    let arc = if side == S_TREE { e ^ 1 } else { e };
+                    if tree[q] == side && self.cap[arc as usize] > 0 {
+                        // Does q's path reach the root? (Distances are counted on the way
+                        // and stamped so later checks stop early.)
+                        let mut d = 0u32;
+                        let mut u = q;
+                        let ok = loop {
+                            if stamp[u] == time {
+                                d += dist[u];
+                                break true;
+                            }
+                            let pa = parent[u];
+                            if pa == ROOT {
+                                stamp[u] = time;
+                                dist[u] = 0;
+                                break true;
+                            }
+                            if pa == NONE {
+                                break false;
+                            }
+                            d += 1;
+                            u = if side == S_TREE {
+                                tail(&self.to, pa)
+                            } else {
+                                self.to[pa as usize] as usize
+                            };
+                        };
+                        if ok {
+                            if d < best.1 {
+                                best = (arc, d);
+                            }
+                            // Stamp the verified path with its distances.
+                            let mut u = q;
+                            let mut du = d;
+                            while stamp[u] != time {
+                                stamp[u] = time;
+                                dist[u] = du;
+                                du = du.saturating_sub(1);
+                                let pa = parent[u];
+                                u = if side == S_TREE {
+                                    tail(&self.to, pa)
+                                } else {
+                                    self.to[pa as usize] as usize
+                                };
+                            }
+                        }
+                    }
+                    e = self.next[ei];
+                }
+                if best.0 != NONE {
+                    parent[o] = best.0;
+                    stamp[o] = time;
+                    dist[o] = best.1 + 1;
+                    continue;
+                }
+                // No parent: o becomes free; neighbours that could grow into it again are
+                // made active, and its children become orphans.
+                let mut e = self.head[o];
+                while e != NONE {
+                    let ei = e as usize;
+                    let q = self.to[ei] as usize;
+                    if tree[q] == side {
+                        let arc = if side == S_TREE { e ^ 1 } else { e };
+                        if self.cap[arc as usize] > 0 && !queued[q] {
+                            queued[q] = true;
+                            active.push_back(q as u32);
+                        }
+                        let pq = parent[q];
+                        let child = pq != NONE
+                            && pq != ROOT
+                            && if side == S_TREE {
+                                tail(&self.to, pq) == o
+                            } else {
+                                self.to[pq as usize] as usize == o
+                            };
+                        if child {
+                            parent[q] = NONE;
+                            orphans.push(q as u32);
+                        }
+                    }
+                    e = self.next[ei];
+                }
+                tree[o] = FREE;
+            }
         }
-        // After the last BFS, the nodes it reached are the source side.
-        let side = self.level[..self.n].iter().map(|&l| l >= 0).collect();
+        let side = tree[..self.n].iter().map(|&v| v == S_TREE).collect();
         (side, flow)
     }
 }
@@ -170,6 +308,141 @@ impl FlowGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Dinic's algorithm: the reference the Boykov–Kolmogorov solver is checked against.
+    fn dinic(g: &mut FlowGraph) -> (Vec<bool>, i64) {
+        let mut level = vec![-1; g.n + 2];
+        let mut iter = vec![NONE; g.n + 2];
+        let mut flow = 0i64;
+        while bfs(g, &mut level) {
+            flow += blocking_flow(g, &mut level, &mut iter);
+        }
+        // After the last BFS, the nodes it reached are the source side.
+        let side = level[..g.n].iter().map(|&l| l >= 0).collect();
+        (side, flow)
+    }
+
+    fn bfs(g: &FlowGraph, level: &mut [i32]) -> bool {
+        let (s, t) = (g.source(), g.sink());
+        level.iter_mut().for_each(|l| *l = -1);
+        let mut queue = std::collections::VecDeque::with_capacity(g.n + 2);
+        level[s] = 0;
+        queue.push_back(s);
+        while let Some(u) = queue.pop_front() {
+            let mut e = g.head[u];
+            while e != NONE {
+                let v = g.to[e as usize] as usize;
+                if g.cap[e as usize] > 0 && level[v] < 0 {
+                    level[v] = level[u] + 1;
+                    queue.push_back(v);
+                }
+                e = g.next[e as usize];
+            }
+        }
+        level[t] >= 0
+    }
+
+    /// One blocking flow along the level graph, with an explicit path stack.
+    fn blocking_flow(g: &mut FlowGraph, level: &mut [i32], iter: &mut [u32]) -> i64 {
+        let (s, t) = (g.source(), g.sink());
+        iter.copy_from_slice(&g.head);
+        let mut total = 0i64;
+        let mut path: Vec<u32> = Vec::new();
+        let mut u = s;
+        loop {
+            if u == t {
+                let f = path.iter().map(|&e| g.cap[e as usize]).min().unwrap_or(0);
+                let mut cut_at = path.len();
+                for (i, &e) in path.iter().enumerate() {
+                    g.cap[e as usize] -= f;
+                    g.cap[(e ^ 1) as usize] += f;
+                    if g.cap[e as usize] == 0 && cut_at == path.len() {
+                        cut_at = i;
+                    }
+                }
+                total += f as i64;
+                path.truncate(cut_at);
+                u = match path.last() {
+                    Some(&e) => g.to[e as usize] as usize,
+                    None => s,
+                };
+                continue;
+            }
+            let mut advanced = false;
+            while iter[u] != NONE {
+                let e = iter[u] as usize;
+                let v = g.to[e] as usize;
+                if g.cap[e] > 0 && level[v] == level[u] + 1 {
+                    path.push(e as u32);
+                    u = v;
+                    advanced = true;
+                    break;
+                }
+                iter[u] = g.next[e];
+            }
+            if advanced {
+                continue;
+            }
+            // Dead end: no augmenting path leaves `u` in this phase.
+            level[u] = -1;
+            match path.pop() {
+                None => return total,
+                Some(e) => {
+                    let tail = g.to[(e ^ 1) as usize] as usize;
+                    iter[tail] = g.next[e as usize];
+                    u = tail;
+                }
+            }
+        }
+    }
+
+    /// Random grids like the refinement's (terminal costs on most pixels, a few hard seeds,
+    /// symmetric smoothness edges to the 8-neighbours, capacities from 1 to ~10⁴): the
+    /// Boykov–Kolmogorov cut equals Dinic's, flow and source side (the smallest source side
+    /// is unique, whichever maximum flow was found).
+    #[test]
+    fn boykov_kolmogorov_equals_dinic_on_random_grids() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = |m: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state % m
+        };
+        for case in 0..60 {
+            let (w, h) = (2 + rnd(40) as usize, 2 + rnd(40) as usize);
+            let n = w * h;
+            let mut a = FlowGraph::new(n);
+            let scale = [4, 100, 10_000][case % 3];
+            for p in 0..n {
+                match rnd(20) {
+                    0 => a.add_terminals(p, INFINITE, 0),
+                    1 => a.add_terminals(p, 0, INFINITE),
+                    _ => {
+                        let (x, y) = (rnd(scale) as i32, rnd(scale) as i32);
+                        a.add_terminals(p, x, y);
+                    }
+                }
+            }
+            for y in 0..h {
+                for x in 0..w {
+                    for (dx, dy) in [(1i32, 0i32), (0, 1), (1, 1), (-1, 1)] {
+                        let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+                        if nx < 0 || ny < 0 || nx >= w as i32 || ny >= h as i32 {
+                            continue;
+                        }
+                        let c = rnd(scale / 2 + 1) as i32;
+                        a.add_edge(y * w + x, ny as usize * w + nx as usize, c, c);
+                    }
+                }
+            }
+            let mut b = a.clone();
+            let (side_bk, flow_bk) = a.min_cut();
+            let (side_d, flow_d) = dinic(&mut b);
+            assert_eq!(flow_bk, flow_d, "case {case}: {w}×{h}");
+            assert_eq!(side_bk, side_d, "case {case}: {w}×{h}");
+        }
+    }
 
     #[test]
     fn textbook_cut() {

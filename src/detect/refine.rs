@@ -15,7 +15,7 @@
 //! 3. **Min-cut.** Unary costs are the mixtures' negative log-likelihoods with a weak foreground
 //!    bonus that falls off from the box centre; pairwise costs between 8-neighbours are GrabCut's
 //!    contrast-sensitive `γ·exp(−β‖zᵢ − zⱼ‖²)/dist` (so the cut follows colour edges). The cut
-//!    is [`FlowGraph`]'s (Dinic, written by hand: see ARCHITECTURE.md).
+//!    is [`FlowGraph`]'s (Boykov–Kolmogorov, written by hand: see ARCHITECTURE.md).
 //! 4. **Iterate.** Each mixture is refitted on the pixels the cut gave it (each pixel to its most
 //!    likely Gaussian), and the cut is solved again, [`RefineConfig::iterations`] times.
 //! 5. **Clean-up and output.** Components much smaller than the largest are dropped (stray
