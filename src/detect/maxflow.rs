@@ -92,216 +92,236 @@ impl FlowGraph {
     /// refinement's grids, where most paths are short, it is several times faster than
     /// Dinic's phases of breadth-first searches over the whole graph.
     pub fn min_cut(&mut self) -> (Vec<bool>, i64) {
-        let total = self.n + 2;
-        let (s, t) = (self.source(), self.sink());
-        let mut tree = vec![FREE; total];
-        let mut parent = vec![NONE; total];
-        let mut stamp = vec![0u32; total];
-        let mut dist = vec![0u32; total];
-        let mut active = std::collections::VecDeque::with_capacity(total);
-        let mut queued = vec![false; total];
-        let mut orphans: Vec<u32> = Vec::new();
-        let mut time = 1u32;
-        tree[s] = S_TREE;
-        tree[t] = T_TREE;
-        parent[s] = ROOT;
-        parent[t] = ROOT;
-        stamp[s] = time;
-        stamp[t] = time;
-        active.push_back(s as u32);
-        active.push_back(t as u32);
-        queued[s] = true;
-        queued[t] = true;
+        let mut bk = Search::new(self);
         let mut flow = 0i64;
-        // The tail of arc `e` (arcs come in pairs `e`, `e ^ 1`).
-        let tail = |to: &[u32], e: u32| to[(e ^ 1) as usize] as usize;
-        loop {
-            // Growth: the front active node extends its tree until the trees meet.
-            let mut meet = NONE;
-            while let Some(&p) = active.front() {
-                let p = p as usize;
-                if tree[p] == FREE {
-                    active.pop_front();
-                    queued[p] = false;
-                    continue;
-                }
-                let mut e = self.head[p];
+        while let Some(meet) = bk.grow() {
+            flow += bk.augment(meet) as i64;
+            bk.adopt();
+        }
+        let side = bk.tree[..bk.g.n].iter().map(|&v| v == S_TREE).collect();
+        (side, flow)
+    }
+}
+
+/// The state of one Boykov–Kolmogorov run over a graph's residual capacities.
+struct Search<'g> {
+    g: &'g mut FlowGraph,
+    /// [`FREE`], [`S_TREE`] or [`T_TREE`] per node.
+    tree: Vec<u8>,
+    /// The arc to the node's parent: in S the arc parent → node, in T the arc node → parent;
+    /// [`ROOT`] for the terminals, [`NONE`] for free nodes and orphans.
+    parent: Vec<u32>,
+    /// When the node's distance to its root was last known right (the heuristic's clock).
+    stamp: Vec<u32>,
+    /// The node's distance to its root, valid at `stamp`.
+    dist: Vec<u32>,
+    /// Nodes that may still grow their tree, in FIFO order.
+    active: std::collections::VecDeque<u32>,
+    queued: Vec<bool>,
+    orphans: Vec<u32>,
+    time: u32,
+}
+
+impl<'g> Search<'g> {
+    fn new(g: &'g mut FlowGraph) -> Self {
+        let total = g.n + 2;
+        let (s, t) = (g.source(), g.sink());
+        let mut bk = Search {
+            g,
+            tree: vec![FREE; total],
+            parent: vec![NONE; total],
+            stamp: vec![0; total],
+            dist: vec![0; total],
+            active: std::collections::VecDeque::with_capacity(total),
+            queued: vec![false; total],
+            orphans: Vec::new(),
+            time: 1,
+        };
+        for (root, side) in [(s, S_TREE), (t, T_TREE)] {
+            bk.tree[root] = side;
+            bk.parent[root] = ROOT;
+            bk.stamp[root] = bk.time;
+            bk.activate(root);
+        }
+        bk
+    }
+
+    fn activate(&mut self, v: usize) {
+        if !self.queued[v] {
+            self.queued[v] = true;
+            self.active.push_back(v as u32);
+        }
+    }
+
+    /// The tail of arc `e` (arcs come in pairs `e`, `e ^ 1`).
+    fn tail(&self, e: u32) -> usize {
+        self.g.to[(e ^ 1) as usize] as usize
+    }
+
+    /// The parent of `v` through its parent arc `e`, in tree `side`.
+    fn up(&self, side: u8, e: u32) -> usize {
+        if side == S_TREE {
+            self.tail(e)
+        } else {
+            self.g.to[e as usize] as usize
+        }
+    }
+
+    /// The arc between `v` and its neighbour across arc `e` (leaving `v`) that carries flow
+    /// in tree `side`'s direction: away from the source in S (`v → q`), towards the sink in
+    /// T (`q → v`) when `v` grows; reversed when `v` looks for a parent.
+    fn tree_arc(side: u8, e: u32, growing: bool) -> u32 {
+        if (side == S_TREE) == growing {
+            e
+        } else {
+            e ^ 1
+        }
+    }
+
+    /// Growth: active nodes extend their trees until the trees meet. Returns the arc from the
+    /// S side to the T side where they met, `None` when no augmenting path is left.
+    fn grow(&mut self) -> Option<u32> {
+        while let Some(&p) = self.active.front() {
+            let p = p as usize;
+            let side = self.tree[p];
+            if side != FREE {
+                let mut e = self.g.head[p];
                 while e != NONE {
-                    let ei = e as usize;
-                    let q = self.to[ei] as usize;
-                    // Residual capacity in the tree's direction: away from the source in S,
-                    // towards the sink in T.
-                    let open = if tree[p] == S_TREE {
-                        self.cap[ei] > 0
-                    } else {
-                        self.cap[ei ^ 1] > 0
-                    };
-                    if open {
-                        if tree[q] == FREE {
-                            tree[q] = tree[p];
-                            // S: the arc parent → q; T: the arc q → parent.
-                            parent[q] = if tree[p] == S_TREE { e } else { e ^ 1 };
-                            stamp[q] = stamp[p];
-                            dist[q] = dist[p] + 1;
-                            if !queued[q] {
-                                queued[q] = true;
-                                active.push_back(q as u32);
-                            }
-                        } else if tree[q] != tree[p] {
-                            // The arc from the S side to the T side.
-                            meet = if tree[p] == S_TREE { e } else { e ^ 1 };
-                            break;
+                    let q = self.g.to[e as usize] as usize;
+                    let arc = Self::tree_arc(side, e, true);
+                    if self.g.cap[arc as usize] > 0 {
+                        if self.tree[q] == FREE {
+                            self.tree[q] = side;
+                            self.parent[q] = arc;
+                            self.stamp[q] = self.stamp[p];
+                            self.dist[q] = self.dist[p] + 1;
+                            self.activate(q);
+                        } else if self.tree[q] != side {
+                            // `p` stays active: it may meet the other tree again.
+                            return Some(arc);
                         }
                     }
-                    e = self.next[ei];
+                    e = self.g.next[e as usize];
                 }
-                if meet != NONE {
-                    break;
-                }
-                active.pop_front();
-                queued[p] = false;
             }
-            if meet == NONE {
-                break;
-            }
-            // Augmentation along s … tail(meet) → head(meet) … t.
-            time += 1;
-            let mut f = self.cap[meet as usize];
-            let mut v = tail(&self.to, meet);
-            while parent[v] != ROOT {
-                f = f.min(self.cap[parent[v] as usize]);
-                v = tail(&self.to, parent[v]);
-            }
-            let mut v = self.to[meet as usize] as usize;
-            while parent[v] != ROOT {
-                f = f.min(self.cap[parent[v] as usize]);
-                v = self.to[parent[v] as usize] as usize;
-            }
-            self.cap[meet as usize] -= f;
-            self.cap[(meet ^ 1) as usize] += f;
-            let mut v = tail(&self.to, meet);
-            while parent[v] != ROOT {
-                let e = parent[v] as usize;
-                self.cap[e] -= f;
-                self.cap[e ^ 1] += f;
-                let up = tail(&self.to, e as u32);
-                if self.cap[e] == 0 {
-                    parent[v] = NONE;
-                    orphans.push(v as u32);
-                }
-                v = up;
-            }
-            let mut v = self.to[meet as usize] as usize;
-            while parent[v] != ROOT {
-                let e = parent[v] as usize;
-                self.cap[e] -= f;
-                self.cap[e ^ 1] += f;
-                let up = self.to[e] as usize;
-                if self.cap[e] == 0 {
-                    parent[v] = NONE;
-                    orphans.push(v as u32);
-                }
-                v = up;
-            }
-            flow += f as i64;
-            // Adoption: each orphan looks for a new parent in its own tree whose path to
-            // the root is intact, or leaves the tree (and orphans its children).
-            while let Some(o) = orphans.pop() {
-                let o = o as usize;
-                let side = tree[o];
-                let mut best = (NONE, u32::MAX);
-                let mut e = self.head[o];
-                while e != NONE {
-                    let ei = e as usize;
-                    let q = self.to[ei] as usize;
-                    // S: the arc q → o must be open; T: the arc o → q.
-                    let arc = if side == S_TREE { e ^ 1 } else { e };
-                    if tree[q] == side && self.cap[arc as usize] > 0 {
-                        // Does q's path reach the root? (Distances are counted on the way
-                        // and stamped so later checks stop early.)
-                        let mut d = 0u32;
-                        let mut u = q;
-                        let ok = loop {
-                            if stamp[u] == time {
-                                d += dist[u];
-                                break true;
-                            }
-                            let pa = parent[u];
-                            if pa == ROOT {
-                                stamp[u] = time;
-                                dist[u] = 0;
-                                break true;
-                            }
-                            if pa == NONE {
-                                break false;
-                            }
-                            d += 1;
-                            u = if side == S_TREE {
-                                tail(&self.to, pa)
-                            } else {
-                                self.to[pa as usize] as usize
-                            };
-                        };
-                        if ok {
-                            if d < best.1 {
-                                best = (arc, d);
-                            }
-                            // Stamp the verified path with its distances.
-                            let mut u = q;
-                            let mut du = d;
-                            while stamp[u] != time {
-                                stamp[u] = time;
-                                dist[u] = du;
-                                du = du.saturating_sub(1);
-                                let pa = parent[u];
-                                u = if side == S_TREE {
-                                    tail(&self.to, pa)
-                                } else {
-                                    self.to[pa as usize] as usize
-                                };
-                            }
-                        }
-                    }
-                    e = self.next[ei];
-                }
-                if best.0 != NONE {
-                    parent[o] = best.0;
-                    stamp[o] = time;
-                    dist[o] = best.1 + 1;
-                    continue;
-                }
-                // No parent: o becomes free; neighbours that could grow into it again are
-                // made active, and its children become orphans.
-                let mut e = self.head[o];
-                while e != NONE {
-                    let ei = e as usize;
-                    let q = self.to[ei] as usize;
-                    if tree[q] == side {
-                        let arc = if side == S_TREE { e ^ 1 } else { e };
-                        if self.cap[arc as usize] > 0 && !queued[q] {
-                            queued[q] = true;
-                            active.push_back(q as u32);
-                        }
-                        let pq = parent[q];
-                        let child = pq != NONE
-                            && pq != ROOT
-                            && if side == S_TREE {
-                                tail(&self.to, pq) == o
-                            } else {
-                                self.to[pq as usize] as usize == o
-                            };
-                        if child {
-                            parent[q] = NONE;
-                            orphans.push(q as u32);
-                        }
-                    }
-                    e = self.next[ei];
-                }
-                tree[o] = FREE;
+            self.active.pop_front();
+            self.queued[p] = false;
+        }
+        None
+    }
+
+    /// Pushes the path's bottleneck along s … tail(meet) → head(meet) … t; nodes whose
+    /// parent arc it saturates become orphans. Returns the flow pushed.
+    fn augment(&mut self, meet: u32) -> i32 {
+        self.time += 1;
+        let ends = [
+            (S_TREE, self.tail(meet)),
+            (T_TREE, self.g.to[meet as usize] as usize),
+        ];
+        let mut f = self.g.cap[meet as usize];
+        for (side, start) in ends {
+            let mut v = start;
+            while self.parent[v] != ROOT {
+                f = f.min(self.g.cap[self.parent[v] as usize]);
+                v = self.up(side, self.parent[v]);
             }
         }
-        let side = tree[..self.n].iter().map(|&v| v == S_TREE).collect();
-        (side, flow)
+        self.g.cap[meet as usize] -= f;
+        self.g.cap[(meet ^ 1) as usize] += f;
+        for (side, start) in ends {
+            let mut v = start;
+            while self.parent[v] != ROOT {
+                let e = self.parent[v];
+                self.g.cap[e as usize] -= f;
+                self.g.cap[(e ^ 1) as usize] += f;
+                let next = self.up(side, e);
+                if self.g.cap[e as usize] == 0 {
+                    self.parent[v] = NONE;
+                    self.orphans.push(v as u32);
+                }
+                v = next;
+            }
+        }
+        f
+    }
+
+    /// Whether `q`'s path to its root (in tree `side`) is intact, and its length; the path
+    /// is stamped with its distances so later checks stop early.
+    fn root_distance(&mut self, side: u8, q: usize) -> Option<u32> {
+        let mut d = 0u32;
+        let mut u = q;
+        loop {
+            if self.stamp[u] == self.time {
+                d += self.dist[u];
+                break;
+            }
+            match self.parent[u] {
+                NONE => return None,
+                ROOT => {
+                    self.stamp[u] = self.time;
+                    self.dist[u] = 0;
+                    break;
+                }
+                pa => {
+                    d += 1;
+                    u = self.up(side, pa);
+                }
+            }
+        }
+        let (mut u, mut du) = (q, d);
+        while self.stamp[u] != self.time {
+            self.stamp[u] = self.time;
+            self.dist[u] = du;
+            du = du.saturating_sub(1);
+            u = self.up(side, self.parent[u]);
+        }
+        Some(d)
+    }
+
+    /// Adoption: each orphan takes the neighbour in its own tree with an open arc to it and
+    /// the shortest intact path to the root as its parent, or leaves the tree: its
+    /// neighbours that could grow into it again become active, its children orphans.
+    fn adopt(&mut self) {
+        while let Some(o) = self.orphans.pop() {
+            let o = o as usize;
+            let side = self.tree[o];
+            let mut best: Option<(u32, u32)> = None;
+            let mut e = self.g.head[o];
+            while e != NONE {
+                let q = self.g.to[e as usize] as usize;
+                let arc = Self::tree_arc(side, e, false);
+                if self.tree[q] == side && self.g.cap[arc as usize] > 0 {
+                    if let Some(d) = self.root_distance(side, q) {
+                        if best.is_none_or(|(_, bd)| d < bd) {
+                            best = Some((arc, d));
+                        }
+                    }
+                }
+                e = self.g.next[e as usize];
+            }
+            if let Some((arc, d)) = best {
+                self.parent[o] = arc;
+                self.stamp[o] = self.time;
+                self.dist[o] = d + 1;
+                continue;
+            }
+            let mut e = self.g.head[o];
+            while e != NONE {
+                let q = self.g.to[e as usize] as usize;
+                if self.tree[q] == side {
+                    if self.g.cap[Self::tree_arc(side, e, false) as usize] > 0 {
+                        self.activate(q);
+                    }
+                    let pq = self.parent[q];
+                    if pq != NONE && pq != ROOT && self.up(side, pq) == o {
+                        self.parent[q] = NONE;
+                        self.orphans.push(q as u32);
+                    }
+                }
+                e = self.g.next[e as usize];
+            }
+            self.tree[o] = FREE;
+        }
     }
 }
 
