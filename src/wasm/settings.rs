@@ -26,8 +26,9 @@ export type DeepPartial<T> = T extends readonly unknown[]
 /** The tracker's settings: any fields of `TrackConfig` over a preset (`"default"` unless
  * given). Unknown fields are errors naming them. */
 export type TrackerSettings = DeepPartial<TrackConfig> & { preset?: Preset };
-/** What the offline pass at the end needs: the video's frame rate (its gates are in seconds),
- * the image size for box-only tracking, and any fields of `OfflineConfig` except `online`
+/** What the offline pass at the end needs: the video's frame rate (its gates are in seconds;
+ * it is the online tracker's `frame_rate` too, unless the tracker's settings give one), the
+ * image size for box-only tracking, and any fields of `OfflineConfig` except `online`
  * (that is the tracker's own settings) over its defaults. */
 export type OfflineSettings = { fps: number; width?: number; height?: number } & DeepPartial<
   Omit<OfflineConfig, "online">

@@ -93,23 +93,35 @@ pub struct Tracker {
 #[wasm_bindgen]
 impl Tracker {
     /// A tracker with the core's defaults, or with the given settings over them. With
-    /// `offline` options it can run the offline pass at the end (`finish`).
+    /// `offline` options it can run the offline pass at the end (`finish`), and their `fps`
+    /// is the online tracker's frame rate too (`frame_rate`, unless the settings give one),
+    /// as `shapetrack track --fps` is: its frame counts that measure time (`max_lost`,
+    /// `coast_frames`, `min_hits`, …), its main gate and its motion noise are then scaled to
+    /// the video's rate.
     #[wasm_bindgen(constructor)]
     pub fn new(
         config: Option<TrackerSettings>,
         offline: Option<OfflineSettings>,
     ) -> Result<Tracker, JsValue> {
-        let cfg = settings::track_config(config.as_ref())?;
+        let mut cfg = settings::track_config(config.as_ref())?;
         let (config, fps, size) = match offline {
             Some(o) => {
-                let o = settings::offline_config(&o, cfg.clone())?;
+                let mut o = settings::offline_config(&o, cfg.clone())?;
+                // Without the rate the counts stay at 30 fps: on a 5 fps video a lost track
+                // took part in the main association for 1.6 s instead of 0.27 s, coasted as
+                // long, and took a neighbour's detection (the car-shadow clip's car changed
+                // id in the page, not in the CLI, which passes `--fps` to both).
+                if cfg.frame_rate.is_none() {
+                    cfg.frame_rate = Some(o.fps);
+                    o.config.online.frame_rate = Some(o.fps);
+                }
                 (Some(o.config), o.fps, o.size)
             }
             None => (None, 1.0, None),
         };
         let offline = config.is_some();
-        // Without offline options nothing is kept for a pass that never runs; the frame rate
-        // is then never used.
+        // Without offline options nothing is kept for a pass that never runs, and the frame
+        // rate is unknown: the online tracker's counts are used as given.
         let config = config.unwrap_or_else(|| {
             let mut c = OfflineConfig {
                 online: cfg.clone(),

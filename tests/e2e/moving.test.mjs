@@ -22,19 +22,22 @@ const IOU = 0.6;
 /**
  * … on at least this many of the video's frames. A regression floor, NOT issue 11's
  * acceptance (IoU ≥ 0.6 on most frames). Measured with the ghost removal: 19 of 40 frames on
- * a quiet machine, but 7 of 40 while other jobs load both cores (the page's realtime VP8
- * encoder then records lower-quality frames), so the floor stays at what a loaded machine
- * gives. `shapetrack detect` on the JPEGs themselves: 27 of 40. The log prints the per-frame
- * figures.
+ * a quiet machine (25 of 40 since the car keeps one id to the end), but 7 of 40 while other
+ * jobs load both cores (the page's realtime VP8 encoder then records lower-quality frames),
+ * so the floor stays at what a loaded machine gives. `shapetrack detect` on the JPEGs
+ * themselves: 27 of 40. The log prints the per-frame figures.
  */
 const MIN_GOOD = 5;
 /**
- * Id changes on the car allowed. A regression floor, NOT the acceptance (one id): on a quiet
- * machine the page's tracker hands the car from id 1 to a new id at frame 35 of 40, while the
- * CLI (`shapetrack detect` then `shapetrack track` with the page's settings, also on
- * re-compressed frames) keeps one id throughout; the cause is not found yet.
+ * Id changes on the car allowed: none (issue 11's acceptance, one id). Before the page's
+ * tracker knew the video's frame rate (it got `fps` only for the offline pass, so its online
+ * counts stayed at 30 fps: a lost track kept in the main association for 8 frames, 1.6 s of
+ * this 5 fps clip, and coasted as long), it handed the car from id 1 to a track lost three
+ * frames earlier at frame 35 of 40 on a quiet machine, while the CLI (`--fps 5`) kept one id.
+ * Measured since: one id on 3 of 3 runs of this test (the machine lightly loaded), and on a
+ * recording at 400 kbit/s instead of 8 Mbit/s (blurrier frames, as a loaded machine records).
  */
-const SWITCHES = 1;
+const SWITCHES = 0;
 
 const app = withApp({ port: PORT });
 
@@ -186,9 +189,8 @@ test('the car-shadow clip opened as a video gets the moving-camera detector on i
   const line = carIous.map((v) => v.toFixed(2)).join(' ');
   for (const id of ids) console.log(`id ${id}: ${m.ious[id].map((v) => v.toFixed(2)).join(' ')}`);
   console.log(`car-shadow: detector ${st.detectorChoice}, ${ids.length} ids, car = id ${car}; mask IoU per frame: ${line}`);
-  // Identity: the id covering the car (IoU ≥ 0.5) per frame; it may change at most once
-  // (a floor, NOT the acceptance of one id throughout: see SWITCHES) and two ids never
-  // cover the car at once.
+  // Identity: the id covering the car (IoU ≥ 0.5) per frame; it never changes (see
+  // SWITCHES) and two ids never cover the car at once.
   /** @type {string[]} */
   const owners = [];
   m.frames.forEach((_, i) => {
@@ -200,6 +202,7 @@ test('the car-shadow clip opened as a video gets the moving-camera detector on i
   console.log(`car-shadow: ids covering the car in turn: ${owners.join(' → ')} (${switches} switches)`);
   assert.ok(switches <= SWITCHES, `the car changed id ${switches} times: ${owners.join(' → ')}`);
   const good = carIous.filter((v) => v >= IOU).length;
+  console.log(`car-shadow: mask IoU ≥ ${IOU} on ${good} of ${n} frames`);
   assert.ok(good >= MIN_GOOD, `mask IoU ≥ ${IOU} on ${good} of ${n} frames: ${line}`);
   await page.screenshot({ path: join(OUT, 'moving-car-shadow.png') });
   assert.deepEqual(errors, []);
