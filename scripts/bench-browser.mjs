@@ -6,24 +6,73 @@
 // depends on how busy the machine is, so nothing here fails on a slow run unless asked to
 // with `--min FPS` (for a quiet machine, e.g. a release check).
 //
-//   npm run build && node scripts/bench-browser.mjs [--frames N] [--min FPS]
+// With `--detectors NAMES` (comma-separated) it benchmarks detectors instead, on real
+// moving-camera video: the DAVIS 2016 JPEGs of one sequence (`bus` unless `--sequence`, 854×480;
+// `--size WxH` rescales them in the page, as createImageBitmap's resize does), decoded in the
+// page and sent frame by frame, as transferred ImageBitmaps, to the app's own tracker worker
+// from www/dist (the same bundle, wasm and detector registry the app runs, opened as the app
+// opens an image sequence). Only the detect call is timed (the worker's `timings.detect`),
+// after the detector's warm-up (the frames its model learns from, see `warmup` in
+// www/src/worker/detectors.js) and 5 more, none of them counted; frames run back and forth when
+// `--frames` exceeds the sequence (a jump back to the first frame is a cut, after which the
+// moving-camera detector learns the scene again). One line per detector goes to the console
+// and is appended to target/e2e/fps.txt; it also gives the worker's whole frame (loading the
+// bitmap into wasm, detecting, tracking) as the app would run at full speed. Names: the app's
+// (`moving`, `background`, `auto`, `ssd`, `ssd-moving`), and `moving-coarse`: the moving-camera
+// detector without its box → mask refinement (`refine: null`), whose difference to `moving` is
+// what refinement costs. `refine` alone (oracle boxes → masks, as `shapetrack detect-eval
+// --methods refine`) has no wasm binding: the app refines only inside MovingDetector, so it is
+// skipped with a note. Not run by default: decoding the sequence and a hundred frames of the
+// moving-camera detector take a minute on this machine, on top of the demo's.
+//
+//   npm run build && node scripts/bench-browser.mjs [--frames N] [--min FPS] [--port P]
+//   npm run build && node scripts/bench-browser.mjs --detectors moving,moving-coarse,background \
+//     [--size 854x480] [--frames N] [--sequence bus] [--min FPS] [--port P]
+//
+// `--frames`: the demo's measured frames (default 300) or each detector's (default 100).
+// `--min FPS`: fail below this tracking rate (demo) or detect rate (each detector).
+// The DAVIS folder is `data/davis2016-moving` under `$SHAPETRACK_SHARED`, else `../shared`
+// beside the repository, else /work/shared (as the CLI's grid finds it).
 
-import { mkdirSync, writeFileSync } from 'node:fs';
+import { appendFileSync, existsSync, mkdirSync, readFileSync, readdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, crowdTracks, launch, serve, untilState } from '../tests/e2e/harness.mjs';
+import { DIST, OUT, ROOT, crowdTracks, launch, serve, untilState, watchErrors } from '../tests/e2e/harness.mjs';
 
 const arg = (/** @type {string} */ name, /** @type {number} */ fallback) => {
   const i = process.argv.indexOf(name);
   return i >= 0 ? Number(process.argv[i + 1]) : fallback;
 };
-const FRAMES = arg('--frames', 300);
+const text = (/** @type {string} */ name) => {
+  const i = process.argv.indexOf(name);
+  return i >= 0 ? process.argv[i + 1] : undefined;
+};
+const DETECTORS = text('--detectors')?.split(',').filter(Boolean) ?? null;
+const FRAMES = arg('--frames', DETECTORS ? 100 : 300);
 const MIN = arg('--min', 0);
-// Unusual, and not the e2e suite's ports: the two may run side by side.
-const PORT = 47411;
+// Unusual, and not the e2e suite's ports: the two may run side by side. `--port` for a second
+// bench beside a first.
+const PORT = arg('--port', 47411);
+
+/**
+ * Bench names that are an app detector with options rather than one of its own.
+ * @type {Record<string, { detector: string, options: Record<string, unknown> }>}
+ */
+const VARIANTS = {
+  // No refinement: the coarse blobs, upscaled (MovingConfig's `refine: None`).
+  'moving-coarse': { detector: 'moving', options: { refine: null } },
+};
 
 const server = await serve(DIST, PORT);
 const browser = await launch();
 try {
+  if (DETECTORS) await benchDetectors(DETECTORS);
+  else await benchDemo();
+} finally {
+  await browser.close();
+  await server.close();
+}
+
+async function benchDemo() {
   const page = await browser.context.newPage();
   const until = (/** @type {(s: any) => boolean} */ pred) => untilState(page, pred, 300_000);
   await page.goto(`${server.url}?speed=max`);
@@ -80,7 +129,164 @@ try {
     `median ${ms.median.toFixed(2)} ms, p95 ${ms.p95.toFixed(2)} ms, max ${ms.max.toFixed(2)} ms over 300 scroll/zoom/seek steps`;
   console.log(tline);
   writeFileSync(join(OUT, 'timeline.txt'), `${tline}\n`);
-} finally {
-  await browser.close();
-  await server.close();
+}
+
+/**
+ * The DAVIS 2016 folder (DAVIS/JPEGImages/480p/SEQUENCE/*.jpg), found as the CLI's grid finds
+ * the shared data (src/grid/datasets.rs `shared_dir`).
+ */
+function davisDir() {
+  const beside = join(ROOT, '..', 'shared');
+  const shared = process.env.SHAPETRACK_SHARED ?? (existsSync(beside) ? beside : '/work/shared');
+  return join(shared, 'data', 'davis2016-moving', 'DAVIS');
+}
+
+/**
+ * Times each detector's detect calls on real frames in the app's tracker worker (see the
+ * header).
+ * @param {string[]} names
+ */
+async function benchDetectors(names) {
+  const sequence = text('--sequence') ?? 'bus';
+  const dir = join(davisDir(), 'JPEGImages', '480p', sequence);
+  if (!existsSync(dir)) throw new Error(`${dir} is missing: the DAVIS 2016 frames (see the header)`);
+  const files = readdirSync(dir).filter((f) => f.endsWith('.jpg')).sort();
+  // The worker's bundle name carries a content hash: the one the app's page would load.
+  const worker = readdirSync(join(DIST, 'assets')).find((f) => /^worker-.*\.js$/.test(f));
+  if (!worker) throw new Error(`no worker bundle in ${DIST}/assets: build the app first (npm run build)`);
+  const size = text('--size')?.split('x').map(Number) ?? null;
+  if (size && (size.length !== 2 || !size.every((v) => v > 0))) throw new Error(`--size WxH, not ${text('--size')}`);
+
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  // A blank page of the app's origin (its worker is a same-origin module) and the frames,
+  // answered from here: the app's own page would run its demo beside the bench.
+  await page.route(`${server.url}bench/**`, (route) => {
+    const name = new URL(route.request().url()).pathname.slice('/bench/'.length);
+    if (name === '') return route.fulfill({ contentType: 'text/html', body: '<!doctype html><title>detector bench</title>' });
+    if (!files.includes(name)) return route.fulfill({ status: 404, body: 'not found' });
+    return route.fulfill({ contentType: 'image/jpeg', body: readFileSync(join(dir, name)) });
+  });
+  await page.goto(`${server.url}bench/`);
+  // Decoded (and rescaled) once, outside any timing.
+  const [width, height] = await page.evaluate(
+    async ({ files, size }) => {
+      /** @type {ImageBitmap[]} */
+      const frames = [];
+      for (const f of files) {
+        const blob = await (await fetch(f)).blob();
+        frames.push(
+          await createImageBitmap(blob, size ? { resizeWidth: size[0], resizeHeight: size[1], resizeQuality: 'high' } : {}),
+        );
+      }
+      /** @type {any} */ (window).__frames = frames;
+      return [frames[0].width, frames[0].height];
+    },
+    { files, size },
+  );
+
+  mkdirSync(OUT, { recursive: true });
+  for (const name of names) {
+    if (name === 'refine') {
+      const note =
+        'detector refine: skipped (no wasm binding refines boxes alone: the app refines only inside ' +
+        'MovingDetector; moving vs moving-coarse gives its cost there)';
+      console.log(note);
+      continue;
+    }
+    const { detector, options } = VARIANTS[name] ?? { detector: name, options: {} };
+    const r = await page.evaluate(
+      async ({ url, detector, options, frames: measured, width, height }) => {
+        const frames = /** @type {ImageBitmap[]} */ (/** @type {any} */ (window).__frames);
+        const worker = new Worker(url, { type: 'module' });
+        let next = 1;
+        /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void }>} */
+        const pending = new Map();
+        worker.addEventListener('message', (e) => {
+          const p = pending.get(e.data.id);
+          if (!p || e.data.progress) return;
+          pending.delete(e.data.id);
+          if (e.data.ok) p.resolve(e.data);
+          else p.reject(new Error(e.data.error));
+        });
+        worker.addEventListener('error', (e) => {
+          for (const p of pending.values()) p.reject(new Error(e.message || 'worker failed to load'));
+          pending.clear();
+        });
+        /**
+         * One request of the worker protocol (www/src/worker/protocol.js).
+         * @param {Record<string, unknown>} req
+         * @param {Transferable[]} [transfer]
+         * @returns {Promise<any>}
+         */
+        const request = (req, transfer = []) =>
+          new Promise((resolve, reject) => {
+            const id = next++;
+            pending.set(id, { resolve, reject });
+            worker.postMessage({ ...req, id }, transfer);
+          });
+        // As the app opens an image sequence (www/src/app.js `openSource`): its size, 25 fps,
+        // the offline pass possible.
+        await request({ type: 'open', source: { kind: 'frames', width, height, fps: 25 }, detector, detectorOptions: options, offline: true });
+        const n = frames.length;
+        // Back and forth: frame k of 0, 1, …, n−1, n−2, …, 1, 0, 1, …
+        const at = (/** @type {number} */ k) => {
+          const p = k % (2 * n - 2);
+          return p < n ? p : 2 * n - 2 - p;
+        };
+        const step = async (/** @type {number} */ k) => {
+          // A copy per step: the worker takes (and closes) the bitmap it is sent, as the app's.
+          const bitmap = await createImageBitmap(frames[at(k)]);
+          return request({ type: 'step', frame: k + 1, bitmap, display: false }, [bitmap]);
+        };
+        const WARM = 5;
+        let k = 0;
+        for (let after = 0; after < WARM; k++) {
+          const s = await step(k);
+          if (!s.warmup || s.warmup.seen >= s.warmup.total) after++;
+        }
+        const warm = k;
+        /** @type {number[]} */
+        const detect = [];
+        let total = 0;
+        let detections = 0;
+        let learning = 0;
+        for (let i = 0; i < measured; i++, k++) {
+          const s = await step(k);
+          detect.push(s.timings.detect);
+          total += s.timings.total;
+          detections += s.detections;
+          if (s.warmup && s.warmup.seen < s.warmup.total) learning++;
+        }
+        await request({ type: 'close' });
+        worker.terminate();
+        const mean = detect.reduce((a, b) => a + b, 0) / detect.length;
+        detect.sort((a, b) => a - b);
+        return {
+          mean,
+          median: detect[detect.length >> 1],
+          total: total / measured,
+          detections: detections / measured,
+          learning,
+          warm,
+        };
+      },
+      { url: `/assets/${worker}`, detector, options, frames: FRAMES, width, height },
+    );
+    if (errors.length) throw new Error(errors.join('\n'));
+    const fps = 1000 / r.mean;
+    const line =
+      `detector ${name} at ${width}x${height}: ${fps.toFixed(1)} fps (${r.mean.toFixed(1)} ms/frame, median ` +
+      `${r.median.toFixed(1)}) over ${FRAMES} frames of DAVIS ${sequence}, detect calls only ` +
+      `(worker frame with loading and tracking: ${(1000 / r.total).toFixed(1)} fps, ${r.total.toFixed(1)} ms; ` +
+      `${r.detections.toFixed(2)} detections/frame; ${r.warm} warm-up frames not counted` +
+      `${r.learning ? `; ${r.learning} counted frames relearning after a cut` : ''})`;
+    console.log(line);
+    appendFileSync(join(OUT, 'fps.txt'), `${line}\n`);
+    if (MIN > 0 && fps < MIN) {
+      console.error(`${name}: ${fps.toFixed(1)} fps < ${MIN}`);
+      process.exitCode = 1;
+    }
+  }
+  await page.close();
 }
