@@ -8,10 +8,11 @@
 //!    at most 6,400 pixels).
 //! 2. **Colour models.** The ring outside the box is background (a hard constraint); the box
 //!    is unknown. The colour analyser's k-means ([`joint_palette`], one palette for the ring and
-//!    the box, seeded) labels every crop pixel; each palette colour becomes one Gaussian of a
-//!    background mixture (fitted on the ring's pixels of that colour) and of a foreground
-//!    mixture (fitted on the box pixels, weighted towards the box centre, where the object most
-//!    likely is).
+//!    the box, seeded, fitted on at most [`RefineConfig::palette_samples`] of the crop's
+//!    pixels) labels every crop pixel with its nearest palette colour; each palette colour
+//!    becomes one Gaussian of a background mixture (fitted on the ring's pixels of that
+//!    colour) and of a foreground mixture (fitted on the box pixels, weighted towards the box
+//!    centre, where the object most likely is).
 //! 3. **Min-cut.** Unary costs are the mixtures' negative log-likelihoods with a weak foreground
 //!    bonus that falls off from the box centre; pairwise costs between 8-neighbours are GrabCut's
 //!    contrast-sensitive `γ·exp(−β‖zᵢ − zⱼ‖²)/dist` (so the cut follows colour edges). The cut
@@ -560,7 +561,6 @@ pub fn refine_box(
     Ok(upsample(&crop, &keep, frame, bbox))
 }
 
-/// The crop's labels as a frame mask inside `bbox` (bilinear, threshold ½).
 /// Index of the palette colour nearest to `c` (squared RGB distance, first on ties), `c`
 /// taken as the 8-bit colour the palette was fitted on.
 fn nearest(centroids: &[[f64; 3]], c: &[f32; 3]) -> usize {
@@ -574,6 +574,7 @@ fn nearest(centroids: &[[f64; 3]], c: &[f32; 3]) -> usize {
     best.0
 }
 
+/// The crop's labels as a frame mask inside `bbox` (bilinear, threshold ½).
 fn upsample(crop: &Crop, keep: &[f32], frame: &Frame, bbox: &BBox) -> Option<Mask> {
     let x0 = bbox.x.max(0.0).floor() as u32;
     let y0 = bbox.y.max(0.0).floor() as u32;
