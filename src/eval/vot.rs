@@ -63,9 +63,9 @@
 //! special and not within `burnin` (10) frames of an initialisation (the initialisation frame
 //! included); failures = number of code-2 frames; reliability = exp(−S·F/L) with S = 30. Over
 //! sequences A and F are length-weighted means. EAO: each initialisation starts a run that
-//! ends before its failure (failed) or at the sequence end (successful); curve[j] = mean over
+//! ends before its failure (failed) or at the sequence end (successful); `curve[j]` = mean over
 //! runs of mean(o₁…o_j) with failed runs padded with zeros and successful runs counted only
-//! while j < their length (curve[0] = mean o₀); EAO = mean of curve[`eao_low`..=`eao_high`]
+//! while j < their length (`curve[0]` = mean o₀); EAO = mean of `curve[eao_low..=eao_high]`
 //! (VOT2019: 46–291).
 
 use crate::frame::{Mask, Point};
