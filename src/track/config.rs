@@ -414,7 +414,7 @@ pub struct Config {
     /// Tracks unmatched in the last frame follow the camera: when the tracks that were matched
     /// agree on a common offset between their predictions and this frame's detections (a
     /// pan, a shake), the others are moved by it before association, so a lost track is looked
-    /// for where the camera took it (see [`super::camera`]). Default true.
+    /// for where the camera took it (see `track::camera`). Default true.
     pub camera_motion: bool,
 }
 
