@@ -5,6 +5,14 @@
 //! `wasm32-unknown-unknown` without threads, and it must not recurse (a search path can be as
 //! long as the graph has nodes, which overflows wasm's small stack). The tests keep a Dinic
 //! solver as the reference it is checked against.
+//!
+//! As in Kolmogorov's own implementation, the terminals are not nodes: each inner node keeps
+//! one residual terminal capacity (from the source when positive, to the sink when negative),
+//! and the nodes with one start in the search trees. A refinement crop ties almost every pixel
+//! to a terminal; as arcs of two hub nodes those were a fifth of the arcs, and every
+//! augmenting path ran through them. Measured: the same cuts (the pipeline digest did not
+//! change), and a modest gain: one `perf` run of the moving-camera detector on DAVIS bus took
+//! about a tenth fewer samples in all, the cut's share about the same.
 
 /// Capacity that no cut will pay: hard constraints.
 pub const INFINITE: i32 = 1 << 28;
@@ -17,13 +25,18 @@ pub struct FlowGraph {
     next: Vec<u32>,
     to: Vec<u32>,
     cap: Vec<i32>,
+    /// Residual terminal capacity per inner node: from the source when positive, to the
+    /// sink when negative.
+    terminal: Vec<i64>,
+    /// Flow already routed source → node → sink when a node got capacity both ways.
+    preflow: i64,
 }
 
 /// Search-tree membership of a node in Boykov–Kolmogorov.
 const FREE: u8 = 0;
 const S_TREE: u8 = 1;
 const T_TREE: u8 = 2;
-/// Parent marker of the two roots (the source and the sink).
+/// Parent marker of the nodes tied to their tree's terminal.
 const ROOT: u32 = u32::MAX - 1;
 
 const NONE: u32 = u32::MAX;
@@ -33,10 +46,12 @@ impl FlowGraph {
     pub fn new(n: usize) -> Self {
         Self {
             n,
-            head: vec![NONE; n + 2],
+            head: vec![NONE; n],
             next: Vec::new(),
             to: Vec::new(),
             cap: Vec::new(),
+            terminal: vec![0; n],
+            preflow: 0,
         }
     }
 
@@ -57,27 +72,43 @@ impl FlowGraph {
         self.head[u] = (self.to.len() - 1) as u32;
     }
 
+    /// Capacity `c` from the source to `u` (`to_source`) or from `u` to the sink; what meets
+    /// capacity the other way is routed source → `u` → sink at once.
+    fn tie(&mut self, u: usize, c: i64, to_source: bool) {
+        let c = c.max(0);
+        let t = &mut self.terminal[u];
+        let opposite = if to_source { (-*t).max(0) } else { (*t).max(0) };
+        self.preflow += c.min(opposite);
+        *t += if to_source { c } else { -c };
+    }
+
     /// An edge `u → v` of capacity `c_uv` and its reverse of capacity `c_vu` (0 for a directed
-    /// edge; equal for the undirected smoothness edges of a grid).
+    /// edge; equal for the undirected smoothness edges of a grid). Either end may be the
+    /// source or the sink; arcs into the source or out of the sink carry no flow and are
+    /// dropped.
     pub fn add_edge(&mut self, u: usize, v: usize, c_uv: i32, c_vu: i32) {
-        self.arc(u, v, c_uv);
-        self.arc(v, u, c_vu);
+        let (s, t) = (self.source(), self.sink());
+        match (u, v) {
+            (u, v) if u == s && v == t => self.preflow += i64::from(c_uv.max(0)),
+            (u, v) if u == t && v == s => self.preflow += i64::from(c_vu.max(0)),
+            (u, v) if u == s => self.tie(v, c_uv.into(), true),
+            (u, v) if v == s => self.tie(u, c_vu.into(), true),
+            (u, v) if v == t => self.tie(u, c_uv.into(), false),
+            (u, v) if u == t => self.tie(v, c_vu.into(), false),
+            (u, v) => {
+                self.arc(u, v, c_uv);
+                self.arc(v, u, c_vu);
+            }
+        }
     }
 
     /// Terminal edges of node `u`: `to_source` is paid when `u` ends on the sink side,
-    /// `to_sink` when it ends on the source side. The common part is cut for sure and dropped,
-    /// which leaves at most one terminal edge per node (less work for the flow).
+    /// `to_sink` when it ends on the source side. The common part is cut for sure and dropped
+    /// (it is not counted in the flow).
     pub fn add_terminals(&mut self, u: usize, to_source: i32, to_sink: i32) {
         let m = to_source.min(to_sink);
-        let (a, b) = (to_source - m, to_sink - m);
-        if a > 0 {
-            let s = self.source();
-            self.add_edge(s, u, a, 0);
-        }
-        if b > 0 {
-            let t = self.sink();
-            self.add_edge(u, t, b, 0);
-        }
+        self.tie(u, i64::from(to_source - m), true);
+        self.tie(u, i64::from(to_sink - m), false);
     }
 
     /// Runs the max-flow and returns, for each inner node, whether it is on the source side of
@@ -93,12 +124,12 @@ impl FlowGraph {
     /// Dinic's phases of breadth-first searches over the whole graph.
     pub fn min_cut(&mut self) -> (Vec<bool>, i64) {
         let mut bk = Search::new(self);
-        let mut flow = 0i64;
+        let mut flow = bk.g.preflow;
         while let Some(meet) = bk.grow() {
-            flow += bk.augment(meet) as i64;
+            flow += bk.augment(meet);
             bk.adopt();
         }
-        let side = bk.tree[..bk.g.n].iter().map(|&v| v == S_TREE).collect();
+        let side = bk.tree.iter().map(|&v| v == S_TREE).collect();
         (side, flow)
     }
 }
@@ -109,11 +140,11 @@ struct Search<'g> {
     /// [`FREE`], [`S_TREE`] or [`T_TREE`] per node.
     tree: Vec<u8>,
     /// The arc to the node's parent: in S the arc parent → node, in T the arc node → parent;
-    /// [`ROOT`] for the terminals, [`NONE`] for free nodes and orphans.
+    /// [`ROOT`] for the nodes tied to the terminal, [`NONE`] for free nodes and orphans.
     parent: Vec<u32>,
-    /// When the node's distance to its root was last known right (the heuristic's clock).
+    /// When the node's distance to its terminal was last known right (the heuristic's clock).
     stamp: Vec<u32>,
-    /// The node's distance to its root, valid at `stamp`.
+    /// The node's distance to its terminal, valid at `stamp`.
     dist: Vec<u32>,
     /// Nodes that may still grow their tree, in FIFO order.
     active: std::collections::VecDeque<u32>,
@@ -123,25 +154,29 @@ struct Search<'g> {
 }
 
 impl<'g> Search<'g> {
+    /// Every node with terminal capacity starts in its terminal's tree, active.
     fn new(g: &'g mut FlowGraph) -> Self {
-        let total = g.n + 2;
-        let (s, t) = (g.source(), g.sink());
+        let n = g.n;
         let mut bk = Search {
             g,
-            tree: vec![FREE; total],
-            parent: vec![NONE; total],
-            stamp: vec![0; total],
-            dist: vec![0; total],
-            active: std::collections::VecDeque::with_capacity(total),
-            queued: vec![false; total],
+            tree: vec![FREE; n],
+            parent: vec![NONE; n],
+            stamp: vec![0; n],
+            dist: vec![0; n],
+            active: std::collections::VecDeque::with_capacity(n),
+            queued: vec![false; n],
             orphans: Vec::new(),
             time: 1,
         };
-        for (root, side) in [(s, S_TREE), (t, T_TREE)] {
-            bk.tree[root] = side;
-            bk.parent[root] = ROOT;
-            bk.stamp[root] = bk.time;
-            bk.activate(root);
+        for v in 0..n {
+            let t = bk.g.terminal[v];
+            if t != 0 {
+                bk.tree[v] = if t > 0 { S_TREE } else { T_TREE };
+                bk.parent[v] = ROOT;
+                bk.stamp[v] = bk.time;
+                bk.dist[v] = 1;
+                bk.activate(v);
+            }
         }
         bk
     }
@@ -210,30 +245,34 @@ impl<'g> Search<'g> {
         None
     }
 
-    /// Pushes the path's bottleneck along s … tail(meet) → head(meet) … t; nodes whose
-    /// parent arc it saturates become orphans. Returns the flow pushed.
-    fn augment(&mut self, meet: u32) -> i32 {
+    /// Pushes the path's bottleneck along source → … tail(meet) → head(meet) … → sink; nodes
+    /// whose parent arc or terminal capacity it exhausts become orphans. Returns the flow
+    /// pushed.
+    fn augment(&mut self, meet: u32) -> i64 {
         self.time += 1;
         let ends = [
             (S_TREE, self.tail(meet)),
             (T_TREE, self.g.to[meet as usize] as usize),
         ];
-        let mut f = self.g.cap[meet as usize];
+        let mut f = i64::from(self.g.cap[meet as usize]);
         for (side, start) in ends {
             let mut v = start;
             while self.parent[v] != ROOT {
-                f = f.min(self.g.cap[self.parent[v] as usize]);
+                f = f.min(i64::from(self.g.cap[self.parent[v] as usize]));
                 v = self.up(side, self.parent[v]);
             }
+            f = f.min(self.g.terminal[v].abs());
         }
-        self.g.cap[meet as usize] -= f;
-        self.g.cap[(meet ^ 1) as usize] += f;
+        // `f` is at most the meeting arc's capacity, an `i32`.
+        let fa = f as i32;
+        self.g.cap[meet as usize] -= fa;
+        self.g.cap[(meet ^ 1) as usize] += fa;
         for (side, start) in ends {
             let mut v = start;
             while self.parent[v] != ROOT {
                 let e = self.parent[v];
-                self.g.cap[e as usize] -= f;
-                self.g.cap[(e ^ 1) as usize] += f;
+                self.g.cap[e as usize] -= fa;
+                self.g.cap[(e ^ 1) as usize] += fa;
                 let next = self.up(side, e);
                 if self.g.cap[e as usize] == 0 {
                     self.parent[v] = NONE;
@@ -241,12 +280,18 @@ impl<'g> Search<'g> {
                 }
                 v = next;
             }
+            let t = &mut self.g.terminal[v];
+            *t += if side == S_TREE { -f } else { f };
+            if *t == 0 {
+                self.parent[v] = NONE;
+                self.orphans.push(v as u32);
+            }
         }
         f
     }
 
-    /// Whether `q`'s path to its root (in tree `side`) is intact, and its length; the path
-    /// is stamped with its distances so later checks stop early.
+    /// Whether `q`'s path to its terminal (in tree `side`) is intact, and its length; the
+    /// path is stamped with its distances so later checks stop early.
     fn root_distance(&mut self, side: u8, q: usize) -> Option<u32> {
         let mut d = 0u32;
         let mut u = q;
@@ -259,7 +304,8 @@ impl<'g> Search<'g> {
                 NONE => return None,
                 ROOT => {
                     self.stamp[u] = self.time;
-                    self.dist[u] = 0;
+                    self.dist[u] = 1;
+                    d += 1;
                     break;
                 }
                 pa => {
@@ -279,8 +325,9 @@ impl<'g> Search<'g> {
     }
 
     /// Adoption: each orphan takes the neighbour in its own tree with an open arc to it and
-    /// the shortest intact path to the root as its parent, or leaves the tree: its
-    /// neighbours that could grow into it again become active, its children orphans.
+    /// the shortest intact path to the terminal as its parent, or leaves the tree: its
+    /// neighbours that could grow into it again become active, its children orphans. (An
+    /// orphan has no terminal capacity left: a node with some keeps its terminal as parent.)
     fn adopt(&mut self) {
         while let Some(o) = self.orphans.pop() {
             let o = o as usize;
@@ -329,14 +376,37 @@ impl<'g> Search<'g> {
 mod tests {
     use super::*;
 
-    /// Dinic's algorithm: the reference the Boykov–Kolmogorov solver is checked against.
-    fn dinic(g: &mut FlowGraph) -> (Vec<bool>, i64) {
+    /// The graph with its terminals as arcs of two extra nodes (`n` the source, `n + 1` the
+    /// sink), for the reference solver.
+    fn with_terminal_arcs(g: &FlowGraph) -> FlowGraph {
+        let mut a = g.clone();
+        a.head.extend([NONE, NONE]);
+        let (s, t) = (g.n, g.n + 1);
+        for (v, &c) in g.terminal.iter().enumerate() {
+            let c = i32::try_from(c.abs()).expect("terminal capacity fits an i32 here");
+            if g.terminal[v] > 0 {
+                a.arc(s, v, c);
+                a.arc(v, s, 0);
+            } else if g.terminal[v] < 0 {
+                a.arc(v, t, c);
+                a.arc(t, v, 0);
+            }
+        }
+        a
+    }
+
+    /// Dinic's algorithm over the terminal arcs: the reference the Boykov–Kolmogorov solver
+    /// is checked against.
+    fn dinic(g: &FlowGraph) -> (Vec<bool>, i64) {
+        let mut g = with_terminal_arcs(g);
+        let g = &mut g;
         let mut level = vec![-1; g.n + 2];
         let mut iter = vec![NONE; g.n + 2];
         let mut flow = 0i64;
         while bfs(g, &mut level) {
             flow += blocking_flow(g, &mut level, &mut iter);
         }
+        flow += g.preflow;
         // After the last BFS, the nodes it reached are the source side.
         let side = level[..g.n].iter().map(|&l| l >= 0).collect();
         (side, flow)
@@ -456,9 +526,9 @@ mod tests {
                     }
                 }
             }
-            let mut b = a.clone();
+            let b = a.clone();
             let (side_bk, flow_bk) = a.min_cut();
-            let (side_d, flow_d) = dinic(&mut b);
+            let (side_d, flow_d) = dinic(&b);
             assert_eq!(flow_bk, flow_d, "case {case}: {w}×{h}");
             assert_eq!(side_bk, side_d, "case {case}: {w}×{h}");
         }
