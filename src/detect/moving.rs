@@ -77,7 +77,11 @@ pub struct MovingConfig {
     pub box_margin: f64,
     /// Radius of the closing that joins the pieces of one object (working pixels). Default `2`.
     pub close_radius: u32,
-    /// Refinement settings; `None` reports the coarse blobs themselves (upscaled).
+    /// Refinement settings; `None` reports the coarse blobs themselves (upscaled). Default:
+    /// [`RefineConfig`]'s defaults without the texture feature (`texture: 0`): on the blobs'
+    /// loose boxes it cost mean J 0.478 → 0.471 on the 8 DAVIS moving-camera sequences
+    /// (car-roundabout and hike −0.03), while on detector-tight boxes it gains. A `refine`
+    /// object given in JSON starts from `RefineConfig`'s defaults, texture on.
     pub refine: Option<RefineConfig>,
     /// Registration error allowed, in working pixels: a pixel is foreground only
     /// when no model pixel within this radius is within the threshold of it, or no frame
@@ -108,7 +112,10 @@ impl Default for MovingConfig {
             max_blobs: 4,
             box_margin: 0.1,
             close_radius: 2,
-            refine: Some(RefineConfig::default()),
+            refine: Some(RefineConfig {
+                texture: 0.0,
+                ..RefineConfig::default()
+            }),
             tolerance: 1,
             ghost_frames: 8,
         }
