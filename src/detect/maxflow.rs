@@ -28,6 +28,9 @@ pub struct FlowGraph {
     /// Residual terminal capacity per inner node: from the source when positive, to the
     /// sink when negative.
     terminal: Vec<i64>,
+    /// Net terminal capacity per inner node as given (from the source minus to the sink),
+    /// for [`FlowGraph::set_terminals`].
+    given: Vec<i64>,
     /// Flow already routed source → node → sink when a node got capacity both ways.
     preflow: i64,
 }
@@ -51,6 +54,7 @@ impl FlowGraph {
             to: Vec::new(),
             cap: Vec::new(),
             terminal: vec![0; n],
+            given: vec![0; n],
             preflow: 0,
         }
     }
@@ -76,6 +80,7 @@ impl FlowGraph {
     /// capacity the other way is routed source → `u` → sink at once.
     fn tie(&mut self, u: usize, c: i64, to_source: bool) {
         let c = c.max(0);
+        self.given[u] += if to_source { c } else { -c };
         let t = &mut self.terminal[u];
         let opposite = if to_source { (-*t).max(0) } else { (*t).max(0) };
         self.preflow += c.min(opposite);
@@ -109,6 +114,23 @@ impl FlowGraph {
         let m = to_source.min(to_sink);
         self.tie(u, i64::from(to_source - m), true);
         self.tie(u, i64::from(to_sink - m), false);
+    }
+
+    /// Replaces node `u`'s terminal capacities after a cut (the arcs between nodes stay), so
+    /// that [`FlowGraph::recut`] starts from the flow already found instead of from zero
+    /// (Kohli and Torr's dynamic graph cuts). The flow through `u`'s terminals is kept;
+    /// where the new capacity is below it, the same amount is added to both of `u`'s terminal
+    /// capacities, which every cut pays once and so moves no cut.
+    pub fn set_terminals(&mut self, u: usize, to_source: i32, to_sink: i32) {
+        let net = i64::from(to_source) - i64::from(to_sink);
+        self.terminal[u] += net - self.given[u];
+        self.given[u] = net;
+    }
+
+    /// The minimum cut again after [`FlowGraph::set_terminals`]: for each inner node whether
+    /// it is on the source side (the smallest source side, as [`FlowGraph::min_cut`]'s).
+    pub fn recut(&mut self) -> Vec<bool> {
+        self.min_cut().0
     }
 
     /// Runs the max-flow and returns, for each inner node, whether it is on the source side of
@@ -531,6 +553,25 @@ mod tests {
             let (side_d, flow_d) = dinic(&b);
             assert_eq!(flow_bk, flow_d, "case {case}: {w}×{h}");
             assert_eq!(side_bk, side_d, "case {case}: {w}×{h}");
+
+            // New terminal capacities on the cut graph (as refinement's next round sets
+            // them): the recut from the kept flow equals a fresh graph's cut.
+            let mut fresh = FlowGraph::new(n);
+            for p in 0..n {
+                let (x, y) = match rnd(20) {
+                    0 => (INFINITE, 0),
+                    1 => (0, INFINITE),
+                    _ => (rnd(scale) as i32, rnd(scale) as i32),
+                };
+                a.set_terminals(p, x, y);
+                fresh.add_terminals(p, x, y);
+            }
+            fresh.to.clone_from(&b.to);
+            fresh.next.clone_from(&b.next);
+            fresh.head.clone_from(&b.head);
+            fresh.cap.clone_from(&b.cap);
+            let (side_fresh, _) = dinic(&fresh);
+            assert_eq!(a.recut(), side_fresh, "case {case}: {w}×{h}, recut");
         }
     }
 

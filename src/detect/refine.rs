@@ -519,6 +519,9 @@ pub fn refine_box(
     let mut best = vec![(0usize, 0usize); n];
     // The colour models whose cut was kept, for the full-resolution boundary.
     let mut models: Option<(Mixture, Mixture)> = None;
+    // One graph for every round: the smoothness arcs do not change, and each later round
+    // starts from the flow of the one before (only the pixels' costs change).
+    let mut g = FlowGraph::new(n);
     for _ in 0..cfg.iterations {
         let wf = fg_weight(&is_fg);
         let wb: Vec<f64> = (0..n).map(|p| if is_fg[p] { 0.0 } else { 1.0 }).collect();
@@ -530,10 +533,11 @@ pub fn refine_box(
         ) else {
             break;
         };
-        let mut g = FlowGraph::new(n);
         for (p, &hard_bg) in ring.iter().enumerate() {
             if hard_bg {
-                g.add_terminals(p, 0, INFINITE);
+                if first {
+                    g.add_terminals(p, 0, INFINITE);
+                }
                 continue;
             }
             let (lf, dfg) = fgm.eval(&crop.feat[p]);
@@ -547,18 +551,24 @@ pub fn refine_box(
             let cost_bg = dbg;
             // Source side = foreground: a pixel pays `cost_bg` if cut to the sink side.
             let m = cost_fg.min(cost_bg);
-            g.add_terminals(
-                p,
+            let (to_source, to_sink) = (
                 ((cost_bg - m) * CAP_SCALE).min(1e8) as i32,
                 ((cost_fg - m) * CAP_SCALE).min(1e8) as i32,
             );
-        }
-        for (&(p, q, _), &c) in pairs.iter().zip(&pair_caps) {
-            if c > 0 {
-                g.add_edge(p as usize, q as usize, c, c);
+            if first {
+                g.add_terminals(p, to_source, to_sink);
+            } else {
+                g.set_terminals(p, to_source, to_sink);
             }
         }
-        let (side, _) = g.min_cut();
+        if first {
+            for (&(p, q, _), &c) in pairs.iter().zip(&pair_caps) {
+                if c > 0 {
+                    g.add_edge(p as usize, q as usize, c, c);
+                }
+            }
+        }
+        let side = g.recut();
         let changed = side.iter().zip(&is_fg).filter(|(a, b)| a != b).count();
         // A cut that empties the box means the models have drifted onto the background's
         // colours (tight boxes around objects coloured like their surroundings): keep the
