@@ -85,7 +85,7 @@ pub struct RefineConfig {
     /// mean absolute luma step between neighbouring frame pixels (foliage, fences and gravel
     /// step a lot, car bodies and coats little). The mixtures' covariances adapt to any
     /// scale; it matters only against the noise floor of each Gaussian. `0`: colour alone.
-    /// Default `1.0` (mean J from oracle boxes 0.743 → 0.751, car-shadow 0.753 → 0.804; the
+    /// Default `1.0` (mean J from oracle boxes 0.743 → 0.752, car-shadow 0.753 → 0.805; the
     /// moving-camera detector turns it off, see [`MovingConfig`](super::MovingConfig)).
     pub texture: f64,
 }
@@ -276,13 +276,14 @@ struct Mixture {
 }
 
 impl Mixture {
-    /// Fits one Gaussian per label from weighted pixels (`labels[i]` in `0..k`).
-    fn fit(rgb: &[[f32; 4]], weights: &[f64], labels: &[usize], k: usize) -> Option<Mixture> {
+    /// Fits one Gaussian per label from weighted pixels' colour and texture (`labels[i]` in
+    /// `0..k`).
+    fn fit(feat: &[[f32; 4]], weights: &[f64], labels: &[usize], k: usize) -> Option<Mixture> {
         const D: usize = 4;
         let mut sw = vec![0f64; k];
         let mut sm = vec![[0f64; D]; k];
         let mut ss = vec![[[0f64; D]; D]; k];
-        for ((c, &w), &l) in rgb.iter().zip(weights).zip(labels) {
+        for ((c, &w), &l) in feat.iter().zip(weights).zip(labels) {
             if w <= 0.0 || l >= k {
                 continue;
             }
@@ -706,7 +707,13 @@ fn upsample(
                     let (px, py) = (x0 + x as u32, y0 + y as u32);
                     match frame.rgb_at(px, py) {
                         Some(rgb) => {
-                            let cell = crop.feat[((ja + jb) / 2) * crop.w + (ia + ib) / 2][3];
+                            // The texture value is a working pixel's (a frame pixel has
+                            // none of its own): the nearest tap's.
+                            let (j, i) = (
+                                if ty < 0.5 { ja } else { jb },
+                                if tx < 0.5 { ia } else { ib },
+                            );
+                            let cell = crop.feat[j * crop.w + i][3];
                             let z = [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32, cell];
                             let (dx, dy) = (
                                 (px as f64 + 0.5 - cx) / (bbox.w / 2.0),
