@@ -116,9 +116,9 @@ impl FlowGraph {
         self.tie(u, i64::from(to_sink - m), false);
     }
 
-    /// Replaces node `u`'s terminal capacities after a cut (the arcs between nodes stay), so
-    /// that [`FlowGraph::recut`] starts from the flow already found instead of from zero
-    /// (Kohli and Torr's dynamic graph cuts). The flow through `u`'s terminals is kept;
+    /// Sets node `u`'s terminal capacities, replacing those given before. After a cut (the
+    /// arcs between nodes stay) [`FlowGraph::recut`] then starts from the flow already found
+    /// instead of from zero (Kohli and Torr's dynamic graph cuts). The flow through `u`'s terminals is kept;
     /// where the new capacity is below it, the same amount is added to both of `u`'s terminal
     /// capacities, which every cut pays once and so moves no cut.
     pub fn set_terminals(&mut self, u: usize, to_source: i32, to_sink: i32) {
@@ -127,8 +127,9 @@ impl FlowGraph {
         self.given[u] = net;
     }
 
-    /// The minimum cut again after [`FlowGraph::set_terminals`]: for each inner node whether
-    /// it is on the source side (the smallest source side, as [`FlowGraph::min_cut`]'s).
+    /// The minimum cut, also after [`FlowGraph::set_terminals`] changed a cut graph: for each
+    /// inner node whether it is on the source side (the smallest source side, as
+    /// [`FlowGraph::min_cut`]'s, whose flow value counts only from the graph as first built).
     pub fn recut(&mut self) -> Vec<bool> {
         self.min_cut().0
     }

@@ -165,9 +165,8 @@ struct Crop {
     scale: f64,
     w: usize,
     h: usize,
-    rgb: Vec<[f32; 3]>,
-    /// What the colour models see per pixel: `[r, g, b, t]`, `t` the block's mean absolute
-    /// luma step between frame neighbours times [`RefineConfig::texture`].
+    /// Per pixel the block's mean colour and its texture: `[r, g, b, t]`, `t` the block's
+    /// mean absolute luma step between frame neighbours times [`RefineConfig::texture`].
     feat: Vec<[f32; 4]>,
     /// 0 = ring (hard background), 1 = inside the box.
     inside: Vec<bool>,
@@ -196,7 +195,6 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
     let scale = ((rx1 - rx0).max(ry1 - ry0) / cfg.max_side as f64).max(1.0);
     let w = ((rx1 - rx0) / scale).floor().max(1.0) as usize;
     let h = ((ry1 - ry0) / scale).floor().max(1.0) as usize;
-    let mut rgb = vec![[0f32; 3]; w * h];
     let mut feat = vec![[0f32; 4]; w * h];
     let tex_scale = cfg.texture as f32;
     let luma = |x: u32, y: u32| frame.gray_at(x, y).unwrap_or(0.0);
@@ -233,8 +231,7 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
             }
             let k = j * w + i;
             if n > 0.0 {
-                rgb[k] = [s[0] / n, s[1] / n, s[2] / n];
-                feat[k] = [rgb[k][0], rgb[k][1], rgb[k][2], tex_scale * t / n];
+                feat[k] = [s[0] / n, s[1] / n, s[2] / n, tex_scale * t / n];
             }
             let (mx, my) = (xa + scale / 2.0, ya + scale / 2.0);
             inside[k] = mx >= b.x && mx < b.x2() && my >= b.y && my < b.y2();
@@ -248,7 +245,6 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
         scale,
         w,
         h,
-        rgb,
         feat,
         inside,
         radial,
@@ -426,7 +422,7 @@ pub fn refine_box(
         let mut rgb = Vec::new();
         for k in (0..n).filter(|&k| sel(k)) {
             pos.push(Point::new((k % crop.w) as f64, (k / crop.w) as f64));
-            let c = crop.rgb[k];
+            let c = crop.feat[k];
             rgb.push([c[0] as u8, c[1] as u8, c[2] as u8]);
         }
         ColorSample::new(pos, rgb, 1.0).map_err(color_err)
@@ -461,7 +457,7 @@ pub fn refine_box(
             *l = src.copied().unwrap_or(0);
         }
     } else {
-        for (l, c) in label.iter_mut().zip(&crop.rgb) {
+        for (l, c) in label.iter_mut().zip(&crop.feat) {
             *l = nearest(&pal.centroids, c);
         }
     }
@@ -486,7 +482,7 @@ pub fn refine_box(
         (1, 1, std::f64::consts::SQRT_2),
         (-1, 1, std::f64::consts::SQRT_2),
     ];
-    let d2 = |a: &[f32; 3], b: &[f32; 3]| -> f64 {
+    let d2 = |a: &[f32; 4], b: &[f32; 4]| -> f64 {
         (0..3)
             .map(|c| {
                 let d = (a[c] - b[c]) as f64;
@@ -496,7 +492,8 @@ pub fn refine_box(
     };
     let mut sum = 0.0;
     let mut cnt = 0usize;
-    let mut pairs: Vec<(u32, u32, f64)> = Vec::with_capacity(4 * n);
+    // `(p, q, distance, squared colour difference)` per neighbour pair.
+    let mut pairs: Vec<(u32, u32, f64, f64)> = Vec::with_capacity(4 * n);
     for j in 0..crop.h {
         for i in 0..crop.w {
             for &(dx, dy, dist) in &offsets {
@@ -505,10 +502,10 @@ pub fn refine_box(
                     continue;
                 }
                 let (p, q) = (j * crop.w + i, nj as usize * crop.w + ni as usize);
-                let v = d2(&crop.rgb[p], &crop.rgb[q]);
+                let v = d2(&crop.feat[p], &crop.feat[q]);
                 sum += v;
                 cnt += 1;
-                pairs.push((p as u32, q as u32, dist));
+                pairs.push((p as u32, q as u32, dist, v));
             }
         }
     }
@@ -517,21 +514,23 @@ pub fn refine_box(
     } else {
         0.0
     };
-    let pair_caps: Vec<i32> = pairs
-        .iter()
-        .map(|&(p, q, dist)| {
-            let v = d2(&crop.rgb[p as usize], &crop.rgb[q as usize]);
-            (cfg.smoothness * (-beta * v).exp() / dist * CAP_SCALE).round() as i32
-        })
-        .collect();
+    // One graph for every round: the ring and the smoothness arcs do not change, and each
+    // later round starts from the flow of the one before (only the pixels' costs change).
+    let mut g = FlowGraph::new(n);
+    for &(p, q, dist, v) in &pairs {
+        let c = (cfg.smoothness * (-beta * v).exp() / dist * CAP_SCALE).round() as i32;
+        if c > 0 {
+            g.add_edge(p as usize, q as usize, c, c);
+        }
+    }
+    for (p, _) in ring.iter().enumerate().filter(|(_, &r)| r) {
+        g.add_terminals(p, 0, INFINITE);
+    }
 
     let mut first = true;
     let mut best = vec![(0usize, 0usize); n];
     // The colour models whose cut was kept, for the full-resolution boundary.
     let mut models: Option<(Mixture, Mixture)> = None;
-    // One graph for every round: the smoothness arcs do not change, and each later round
-    // starts from the flow of the one before (only the pixels' costs change).
-    let mut g = FlowGraph::new(n);
     for _ in 0..cfg.iterations {
         let wf = fg_weight(&is_fg);
         let wb: Vec<f64> = (0..n).map(|p| if is_fg[p] { 0.0 } else { 1.0 }).collect();
@@ -545,9 +544,6 @@ pub fn refine_box(
         };
         for (p, &hard_bg) in ring.iter().enumerate() {
             if hard_bg {
-                if first {
-                    g.add_terminals(p, 0, INFINITE);
-                }
                 continue;
             }
             let (lf, dfg) = fgm.eval(&crop.feat[p]);
@@ -565,18 +561,7 @@ pub fn refine_box(
                 ((cost_bg - m) * CAP_SCALE).min(1e8) as i32,
                 ((cost_fg - m) * CAP_SCALE).min(1e8) as i32,
             );
-            if first {
-                g.add_terminals(p, to_source, to_sink);
-            } else {
-                g.set_terminals(p, to_source, to_sink);
-            }
-        }
-        if first {
-            for (&(p, q, _), &c) in pairs.iter().zip(&pair_caps) {
-                if c > 0 {
-                    g.add_edge(p as usize, q as usize, c, c);
-                }
-            }
+            g.set_terminals(p, to_source, to_sink);
         }
         let side = g.recut();
         let changed = side.iter().zip(&is_fg).filter(|(a, b)| a != b).count();
@@ -645,7 +630,7 @@ struct Boundary<'a> {
 
 /// Index of the palette colour nearest to `c` (squared RGB distance, first on ties), `c`
 /// taken as the 8-bit colour the palette was fitted on.
-fn nearest(centroids: &[[f64; 3]], c: &[f32; 3]) -> usize {
+fn nearest(centroids: &[[f64; 3]], c: &[f32; 4]) -> usize {
     let mut best = (0, f64::INFINITY);
     for (i, m) in centroids.iter().enumerate() {
         let d: f64 = (0..3).map(|a| (f64::from(c[a] as u8) - m[a]).powi(2)).sum();
