@@ -118,6 +118,58 @@ fn moved_textured_shape_is_cheaper_than_a_recoloured_or_rearranged_one() {
     assert!(palette_distance(&a, &other, &cfg).unwrap() > 0.5);
 }
 
+/// The per-view form of C2 (each shape's own palette, computed once) tells the same shapes
+/// apart as the joint one: a moved shape is cheap, a recoloured or rearranged one is not, and
+/// a shape against itself costs nothing.
+#[test]
+fn per_view_palettes_separate_what_the_joint_palette_separates() {
+    let cfg = ColorConfig {
+        per_view: true,
+        ..ColorConfig::default()
+    };
+    let a = sample(80.0, 70.0, 1.0, striped);
+    let (dx, dy) = (57.0, 31.0);
+    let moved = sample(80.0 + dx, 70.0 + dy, 1.0, striped);
+    let other = sample(80.0 + dx, 70.0 + dy, 1.0, recoloured);
+    let shuffled = sample(80.0 + dx, 70.0 + dy, 1.0, rearranged);
+    let pal = |s: &ColorSample| view_palette(s, &cfg).unwrap();
+    let pa = pal(&a);
+    assert_eq!(pa.labels.len(), a.len());
+    assert!(pa.centroids.len() <= cfg.clusters);
+    let itself = color_cost_per_view((&a, &pa), (&a, &pa), None, &cfg).unwrap();
+    assert_sane(&itself);
+    assert_eq!((itself.cost, itself.overlap), (0.0, 1.0));
+    assert!(itself.palette_distance < 1e-9, "{itself:?}");
+    let cost = |b: &ColorSample| {
+        let m = color_cost_per_view((&a, &pa), (b, &pal(b)), None, &cfg).unwrap();
+        assert_sane(&m);
+        assert!(m.overlap > 0.95, "{m:?}");
+        m
+    };
+    let (same, diff, shuf) = (cost(&moved), cost(&other), cost(&shuffled));
+    assert!(same.cost < 0.05, "{same:?}");
+    assert!(diff.cost > 0.5, "{diff:?}");
+    assert!(shuf.cost > 0.3, "{shuf:?}");
+    assert!(
+        same.palette_distance < 0.1 && shuf.palette_distance < 0.1,
+        "{same:?} {shuf:?}"
+    );
+    assert!(diff.palette_distance > 0.5, "{diff:?}");
+    // Within a few points of the joint palette's C2 on each pair.
+    for (b, m) in [(&moved, &same), (&other, &diff), (&shuffled, &shuf)] {
+        let joint = color_cost(&a, b, None, &cfg).unwrap();
+        assert!((joint.cost - m.cost).abs() < 0.1, "{joint:?} vs {m:?}");
+    }
+    // Labels that do not belong to the samples are refused, not read out of bounds.
+    let short = ViewPalette {
+        labels: vec![0],
+        ..pa.clone()
+    };
+    assert!(color_cost_per_view((&a, &short), (&a, &pa), None, &cfg).is_err());
+    let empty = ColorSample::default();
+    assert!(view_palette(&empty, &cfg).is_err());
+}
+
 #[test]
 fn scaled_shape_aligned_by_similarity_stays_cheap() {
     let cfg = ColorConfig::default();

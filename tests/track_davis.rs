@@ -58,7 +58,7 @@ fn car_keeps_one_id(config: Config) {
         shapes.extend(tracker.update(Some(&frame), dets).unwrap());
         // Appearance is computed on the real pixels (for the track's reference view).
         if let Some(a) = tracker.tracks().first().and_then(|t| t.appearance()) {
-            keypoints = keypoints.max(a.sift.as_ref().map_or(0, |s| s.len()));
+            keypoints = keypoints.max(a.sift().map_or(0, |s| s.len()));
             assert!(a.colour.as_ref().is_some_and(|c| c.len() > 50));
             assert_eq!(a.shape.is_some(), uses_shape);
         }

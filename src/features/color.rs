@@ -24,6 +24,15 @@
 //! For re-identifying a lost track there is no alignment; [`palette_distance`] compares the two
 //! shapes' label histograms over the shared palette (Hellinger distance) instead.
 //!
+//! **Per-view palettes** ([`view_palette`], [`color_cost_per_view`]): the same C2 with each
+//! shape's own k-means palette, computed once per shape instead of once per compared pair;
+//! two samples differ when their palettes' colours are more than `color_tolerance` apart,
+//! the rule [`Palette::differ`] applies within one joint palette. What the joint palette buys
+//! is repeatability (one colour, one label in both shapes); with the tolerance, two views'
+//! palettes of the same colours agree as long as their centroids for a colour stay within it,
+//! which they do for whole views of one shape, and not always for a sliver against a whole
+//! view (see the tracker's use).
+//!
 //! k-means cost: linfa runs `n_runs` k-means++ restarts (its default is 10, ours 1) of up to
 //! `max_iterations` Lloyd steps over `|A| + |B|` points; with 1500 + 1500 samples and `K = 10`
 //! this is a few milliseconds per pair (see `benches/descriptors.rs`). linfa parallelises the
@@ -106,6 +115,15 @@ pub struct ColorConfig {
     /// number of colours an object really has, k-means splits a colour into shades along
     /// noise and shading, and the literal rule would count those shades as colour changes.
     pub color_tolerance: f64,
+    /// For the tracker's aligned C2 (Alg. 6): each shape gets its own palette, once
+    /// ([`view_palette`]), instead of one k-means per compared pair ([`joint_palette`]); two
+    /// samples' colours are compared through their own palettes' colours with the same
+    /// `color_tolerance` ([`color_cost_per_view`]). Default false here (the thesis' joint
+    /// palette); the tracker's appearance settings turn it on
+    /// (`track::AppearanceConfig::colour`, where the reason is given). The functions of this
+    /// module take the palettes they are given and do not read it.
+    #[serde(default)]
+    pub per_view: bool,
 }
 
 impl Default for ColorConfig {
@@ -119,6 +137,7 @@ impl Default for ColorConfig {
             max_samples: 1500,
             overlap_radius: 1.0,
             color_tolerance: 20.0,
+            per_view: false,
         }
     }
 }
@@ -352,9 +371,23 @@ pub fn joint_palette(
             return Err(ColorError::EmptySample { which });
         }
     }
-    let n = a.rgb.len() + b.rgb.len();
+    let (centroids, labels) = kmeans(a.rgb.iter().chain(&b.rgb), a.rgb.len() + b.rgb.len(), cfg)?;
+    let (la, lb) = labels.split_at(a.rgb.len().min(labels.len()));
+    Ok(Palette {
+        centroids,
+        labels_a: la.to_vec(),
+        labels_b: lb.to_vec(),
+    })
+}
+
+/// k-means++ (linfa) on `n` colours: the centroids and each colour's label.
+fn kmeans<'a>(
+    rgb: impl Iterator<Item = &'a [u8; 3]>,
+    n: usize,
+    cfg: &ColorConfig,
+) -> Result<(Vec<[f64; 3]>, Vec<usize>), ColorError> {
     let mut data = Array2::<f64>::zeros((n, 3));
-    for (mut row, c) in data.rows_mut().into_iter().zip(a.rgb.iter().chain(&b.rgb)) {
+    for (mut row, c) in data.rows_mut().into_iter().zip(rgb) {
         row[0] = c[0] as f64;
         row[1] = c[1] as f64;
         row[2] = c[2] as f64;
@@ -378,12 +411,136 @@ pub fn joint_palette(
         .into_iter()
         .map(|r| [r[0], r[1], r[2]])
         .collect();
-    let labels = labels.to_vec();
-    let (la, lb) = labels.split_at(a.rgb.len().min(labels.len()));
-    Ok(Palette {
-        centroids,
-        labels_a: la.to_vec(),
-        labels_b: lb.to_vec(),
+    Ok((centroids, labels.to_vec()))
+}
+
+/// One shape's own palette ([`view_palette`]) and its samples' labels in it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ViewPalette {
+    /// Palette colours (k-means centroids), RGB in `[0, 255]`; at most K.
+    pub centroids: Vec<[f64; 3]>,
+    /// Label of each sample (index into `centroids`).
+    pub labels: Vec<usize>,
+}
+
+impl ViewPalette {
+    /// Normalised label histogram.
+    fn histogram(&self) -> Vec<f64> {
+        let mut h = vec![0.0; self.centroids.len()];
+        for &l in &self.labels {
+            if let Some(v) = h.get_mut(l) {
+                *v += 1.0;
+            }
+        }
+        let n = self.labels.len().max(1) as f64;
+        h.iter_mut().for_each(|v| *v /= n);
+        h
+    }
+}
+
+/// k-means++ on one shape's samples alone ([`ColorConfig::per_view`]): computed once per
+/// shape, where [`joint_palette`] runs once per compared pair. In a crowd a shape is compared
+/// with several candidates, and the per-pair k-means made the colour cost grow with the
+/// square of the crowd (issue 10).
+pub fn view_palette(s: &ColorSample, cfg: &ColorConfig) -> Result<ViewPalette, ColorError> {
+    cfg.validate()?;
+    let s = checked(s)?;
+    if s.rgb.is_empty() {
+        return Err(ColorError::EmptySample { which: "A" });
+    }
+    let (centroids, labels) = kmeans(s.rgb.iter(), s.rgb.len(), cfg)?;
+    Ok(ViewPalette { centroids, labels })
+}
+
+/// Whether each pair of palette colours (`a`'s `i`, `b`'s `j`, at `i · |b| + j`) lies more
+/// than `tolerance` apart: [`Palette::differ`] across two palettes.
+fn differ_across(a: &ViewPalette, b: &ViewPalette, tolerance: f64) -> Vec<bool> {
+    let t2 = tolerance.max(1e-6).powi(2);
+    a.centroids
+        .iter()
+        .flat_map(|ca| {
+            b.centroids.iter().map(move |cb| {
+                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
+                d2 > t2
+            })
+        })
+        .collect()
+}
+
+/// C2 (Alg. 6) with each shape's own palette ([`ColorConfig::per_view`]): as
+/// [`color_cost`], except that an aligned B sample and A's sample under it differ when their
+/// palettes' colours are more than `color_tolerance` apart (with one joint palette: their
+/// shared labels' colours). `palette_distance` is the share of the two shapes' colour mass
+/// that cannot be paired with a colour of the other within the tolerance (each palette's
+/// shades of one colour split differently, so label histograms are not compared bin by bin).
+pub fn color_cost_per_view(
+    (a, pa): (&ColorSample, &ViewPalette),
+    (b, pb): (&ColorSample, &ViewPalette),
+    b_to_a: Option<&Transform>,
+    cfg: &ColorConfig,
+) -> Result<ColorMatch, ColorError> {
+    cfg.validate()?;
+    let a = checked(a)?;
+    let b = checked(b)?;
+    if pa.labels.len() != a.len() || pb.labels.len() != b.len() {
+        return Err(ColorError::LengthMismatch {
+            positions: a.len() + b.len(),
+            rgb: pa.labels.len() + pb.labels.len(),
+        });
+    }
+    let (transform, alignment) = align(a, b, b_to_a)?;
+    let kb = pb.centroids.len();
+    let differ = differ_across(pa, pb, cfg.color_tolerance);
+    let index = PointIndex::new(&a.positions);
+    let radius = cfg.overlap_radius * a.spacing;
+    let (mut compared, mut differing) = (0usize, 0usize);
+    for (p, &lb) in b.positions.iter().zip(&pb.labels) {
+        let Some((i, d)) = index.nearest(transform.apply(*p)) else {
+            continue;
+        };
+        if d > radius {
+            continue;
+        }
+        let Some(&la) = pa.labels.get(i) else {
+            continue;
+        };
+        compared += 1;
+        if differ.get(la * kb + lb).copied().unwrap_or(true) {
+            differing += 1;
+        }
+    }
+    let cost = if compared == 0 {
+        1.0
+    } else {
+        differing as f64 / compared as f64
+    };
+    // The share of colour mass that cannot be paired with a colour of the other shape within
+    // the tolerance: greedy transport between the two label histograms, closest colours first.
+    let (mut ha, mut hb) = (pa.histogram(), pb.histogram());
+    let mut close: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, ca) in pa.centroids.iter().enumerate() {
+        for (j, cb) in pb.centroids.iter().enumerate() {
+            if !differ.get(i * kb + j).copied().unwrap_or(true) {
+                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
+                close.push((d2, i, j));
+            }
+        }
+    }
+    close.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut paired = 0.0;
+    for (_, i, j) in close {
+        let m = ha[i].min(hb[j]);
+        ha[i] -= m;
+        hb[j] -= m;
+        paired += m;
+    }
+    Ok(ColorMatch {
+        cost,
+        overlap: compared as f64 / b.len() as f64,
+        compared,
+        differing,
+        palette_distance: (1.0 - paired).clamp(0.0, 1.0),
+        alignment,
     })
 }
 
@@ -433,23 +590,7 @@ pub fn color_cost(
     let a = checked(a)?;
     let b = checked(b)?;
     let palette = joint_palette(a, b, cfg)?;
-    let (transform, alignment) = match b_to_a {
-        Some(t) => (*t, ColorAlignment::Transform),
-        None => {
-            let (ca, cb) = match (a.centroid(), b.centroid()) {
-                (Some(ca), Some(cb)) => (ca, cb),
-                (None, _) => return Err(ColorError::EmptySample { which: "A" }),
-                (_, None) => return Err(ColorError::EmptySample { which: "B" }),
-            };
-            (
-                Transform::Translation(Translation {
-                    dx: ca.x - cb.x,
-                    dy: ca.y - cb.y,
-                }),
-                ColorAlignment::Centroid,
-            )
-        }
-    };
+    let (transform, alignment) = align(a, b, b_to_a)?;
     let k = palette.centroids.len();
     let differ: Vec<bool> = (0..k * k)
         .map(|ij| palette.differ(ij / k, ij % k, cfg.color_tolerance))
@@ -486,6 +627,30 @@ pub fn color_cost(
         palette_distance: hellinger(&ha, &hb),
         alignment,
     })
+}
+
+/// The transform bringing B into A's frame: `b_to_a`, else the one moving B's sample centroid
+/// onto A's.
+fn align(
+    a: &ColorSample,
+    b: &ColorSample,
+    b_to_a: Option<&Transform>,
+) -> Result<(Transform, ColorAlignment), ColorError> {
+    if let Some(t) = b_to_a {
+        return Ok((*t, ColorAlignment::Transform));
+    }
+    let (ca, cb) = match (a.centroid(), b.centroid()) {
+        (Some(ca), Some(cb)) => (ca, cb),
+        (None, _) => return Err(ColorError::EmptySample { which: "A" }),
+        (_, None) => return Err(ColorError::EmptySample { which: "B" }),
+    };
+    Ok((
+        Transform::Translation(Translation {
+            dx: ca.x - cb.x,
+            dy: ca.y - cb.y,
+        }),
+        ColorAlignment::Centroid,
+    ))
 }
 
 /// Alignment-free colour distance for re-identification: the Hellinger distance between the

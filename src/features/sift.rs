@@ -319,20 +319,53 @@ pub fn detect_in_region(
     mask: Option<&Mask>,
     cfg: &SiftConfig,
 ) -> Result<SiftFeatures, SiftError> {
-    let Some(((x0, y0, w, h), crop)) = frame.gray_crop(region) else {
-        return Ok(SiftFeatures::default());
-    };
-    let mask_crop = mask.map(|m| {
-        GrayImage::from_fn(w, h, |x, y| {
-            Luma([u8::from(m.get((x0 + x) as i32, (y0 + y) as i32)) * 255])
-        })
-    });
-    let mut feats = detect_and_compute(&crop, mask_crop.as_ref(), cfg)?;
-    for k in &mut feats.keypoints {
-        k.x += x0 as f32;
-        k.y += y0 as f32;
+    match RegionCrop::new(frame, region, mask) {
+        Some(crop) => crop.detect(cfg),
+        None => Ok(SiftFeatures::default()),
     }
-    Ok(feats)
+}
+
+/// The input of [`detect_in_region`] cut out of the frame: the grey crop of the region and,
+/// when a mask was given, the mask over the same crop. It lets the keypoints be computed
+/// after the frame is gone, and only if they are ever needed (the tracker keeps one per
+/// described view, and most views are never compared by SIFT).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionCrop {
+    /// Top-left corner of the crop in the frame.
+    origin: (u32, u32),
+    /// The grey crop.
+    gray: GrayImage,
+    /// The mask over the crop (255 = foreground).
+    mask: Option<GrayImage>,
+}
+
+impl RegionCrop {
+    /// Cuts `region` (clipped to the frame) out of `frame`, with `mask` over it; `None` when
+    /// the region lies outside the frame.
+    pub fn new(frame: &Frame<'_>, region: &BBox, mask: Option<&Mask>) -> Option<Self> {
+        let ((x0, y0, w, h), gray) = frame.gray_crop(region)?;
+        let mask = mask.map(|m| {
+            GrayImage::from_fn(w, h, |x, y| {
+                Luma([u8::from(m.get((x0 + x) as i32, (y0 + y) as i32)) * 255])
+            })
+        });
+        Some(Self {
+            origin: (x0, y0),
+            gray,
+            mask,
+        })
+    }
+
+    /// The SIFT features of the crop, in frame coordinates (as [`detect_in_region`]).
+    pub fn detect(&self, cfg: &SiftConfig) -> Result<SiftFeatures, SiftError> {
+        let mut feats = detect_and_compute(&self.gray, self.mask.as_ref(), cfg)?;
+        let (x0, y0) = self.origin;
+        for k in &mut feats.keypoints {
+            k.x += x0 as f32;
+            k.y += y0 as f32;
+        }
+        Ok(feats)
+    }
 }
 
 /// Matches descriptors of `query` against `train` (brute-force L2, ratio test, optional cross

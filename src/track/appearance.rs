@@ -13,7 +13,9 @@
 //! appearance computed while the shape was seen whole (re-identification after an occlusion,
 //! when the last view was a sliver at an occluder's edge).
 
-use crate::features::color::{color_cost, joint_palette, palette_distance, ColorConfig};
+use crate::features::color::{
+    color_cost, color_cost_per_view, joint_palette, palette_distance, ColorConfig,
+};
 use crate::features::shape_context::{match_shapes, shape_cost_from_matches, ShapeContextConfig};
 use crate::features::sift::{match_descriptors, MatchConfig};
 use crate::frame::Point;
@@ -77,7 +79,7 @@ impl PairCost for ShapeContextCost {
         let m = match self.variant {
             ShapeVariant::Contour => match_shapes(sa, sb, &self.config).ok()?,
             ShapeVariant::Sift => {
-                let (ka, kb) = (a.sift.as_ref()?, b.sift.as_ref()?);
+                let (ka, kb) = (a.sift()?, b.sift()?);
                 let pt = |k: &crate::features::sift::Keypoint| Point::new(k.x as f64, k.y as f64);
                 let pairs: Vec<(Point, Point)> = match_descriptors(ka, kb, &self.matching)
                     .iter()
@@ -107,6 +109,7 @@ pub enum ColourMode {
     /// consecutive, so the motion between the two views is mostly a translation; aligning by
     /// the shape context fit instead would fit the transform a second time per pair, and
     /// would inherit its errors on partly occluded shapes. Normalised within the cluster.
+    /// With [`ColorConfig::per_view`], each view's own palette replaces the joint one.
     #[default]
     Aligned,
     /// Alignment-free: Hellinger distance between the two label histograms over the joint
@@ -148,7 +151,14 @@ impl PairCost for ColourCost {
     fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
         let (a, b) = (self.side.of(track)?, det_appearance(det)?);
         let (ca, cb) = (a.colour.as_ref()?, b.colour.as_ref()?);
+        let cfg = &self.config;
         let c = match self.mode {
+            ColourMode::Aligned if cfg.per_view => {
+                let (pa, pb) = (a.palette(cfg)?, b.palette(cfg)?);
+                color_cost_per_view((ca, pa), (cb, pb), None, cfg)
+                    .ok()?
+                    .cost
+            }
             ColourMode::Aligned => color_cost(ca, cb, None, &self.config).ok()?.cost,
             ColourMode::Palette => palette_distance(ca, cb, &self.config).ok()?,
             ColourMode::Contained => {
@@ -197,7 +207,7 @@ impl PairCost for SiftCost {
 
     fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
         let (a, b) = (self.side.of(track)?, det_appearance(det)?);
-        let (ka, kb) = (a.sift.as_ref()?, b.sift.as_ref()?);
+        let (ka, kb) = (a.sift()?, b.sift()?);
         let n = ka.len().min(kb.len());
         if n < self.min_keypoints.max(1) {
             return None;

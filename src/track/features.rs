@@ -24,13 +24,13 @@
 //! reduction moves shell vertices by at most about one reduced pixel, i.e. `side / max_side`
 //! pixels (measured in `tests::bounded_canny_shell_error`).
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use serde::{Deserialize, Serialize};
 
-use crate::features::color::{ColorConfig, ColorSample};
+use crate::features::color::{view_palette, ColorConfig, ColorSample, ViewPalette};
 use crate::features::shape_context::{ShapeContextConfig, ShapeDescriptor};
-use crate::features::sift::{detect_in_region, SiftConfig, SiftFeatures};
+use crate::features::sift::{RegionCrop, SiftConfig, SiftFeatures};
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
 use crate::geometry::{mask_geometry, ConvexShell, GeometryConfig, MaskCrop, Moments};
 
@@ -154,6 +154,16 @@ pub struct AppearanceConfig {
     /// Colour analyser settings. Default: K = 10 as the thesis, at most 150 grid samples per
     /// shape: on the synthetic scenes the scores do not change between 50 and 1500 samples
     /// (`cargo run --release --example ablation -- --all`), while k-means time grows with them.
+    ///
+    /// `per_view` is on: the main association's C2 compares each view's own palette, k-means
+    /// run once per view ([`Appearance::palette`]) instead of once per compared pair. In a
+    /// crowd a view is compared with several candidates, and the per-pair k-means was most of
+    /// the 200-shape bench's time (issue 10); on the robustness grid's 13 mask cells, online
+    /// and offline, every score is the same either way (`tests/data/quality/README.md`).
+    /// Re-identification's containment measure ([`ColourMode::Contained`](super::ColourMode))
+    /// keeps the joint palette: it compares a possibly partial view with a whole one, where
+    /// the two palettes' centroids of one colour drift apart by more than the tolerance; with
+    /// per-view palettes there the mask cells lost 1.8 HOTA.
     pub colour: ColorConfig,
     /// Shape context settings. Default: 32 contour vertices (the χ² assignment is cubic in it;
     /// 32 costs ~0.1 ms a pair, 64 ~0.3 ms).
@@ -198,6 +208,7 @@ impl Default for AppearanceConfig {
             },
             colour: ColorConfig {
                 max_samples: 150,
+                per_view: true,
                 ..ColorConfig::default()
             },
             shape_context: ShapeContextConfig {
@@ -258,10 +269,88 @@ pub struct Appearance {
     pub frame: u32,
     /// Shape context descriptor of the outer contour, resampled (Alg. 4).
     pub shape: Option<ShapeDescriptor>,
-    /// SIFT keypoints and descriptors inside the mask, frame coordinates (Alg. 5).
-    pub sift: Option<SiftFeatures>,
+    /// SIFT keypoints and descriptors inside the mask, frame coordinates (Alg. 5), computed
+    /// the first time they are read ([`Appearance::sift`]).
+    pub sift: Option<LazySift>,
     /// Grid sample of the mask's pixels (Alg. 6).
     pub colour: Option<ColorSample>,
+    /// The colour sample's own palette, computed on first read ([`Appearance::palette`]).
+    palette: OnceLock<Option<ViewPalette>>,
+}
+
+impl Appearance {
+    /// The view's appearance from its parts.
+    pub fn new(
+        frame: u32,
+        shape: Option<ShapeDescriptor>,
+        sift: Option<LazySift>,
+        colour: Option<ColorSample>,
+    ) -> Self {
+        Self {
+            frame,
+            shape,
+            sift,
+            colour,
+            palette: OnceLock::new(),
+        }
+    }
+
+    /// The colour sample's own palette ([`ColorConfig::per_view`]), computed with `cfg` on
+    /// the first read (every later read returns that one); `None` without a colour sample.
+    pub fn palette(&self, cfg: &ColorConfig) -> Option<&ViewPalette> {
+        self.palette
+            .get_or_init(|| view_palette(self.colour.as_ref()?, cfg).ok())
+            .as_ref()
+    }
+
+    /// The view's SIFT features, computed now if this is their first read; `None` when SIFT
+    /// was not asked for (or could not be computed: a term reading them then drops out).
+    pub fn sift(&self) -> Option<&SiftFeatures> {
+        self.sift.as_ref()?.get()
+    }
+}
+
+/// A view's SIFT features, computed on first read. The tracker describes most matched
+/// detections in a crowd (colour is read by the main association, and a view's appearance is
+/// taken before a crossing), but SIFT is read only to re-identify a lost track: computed
+/// eagerly, it was most of the describe cost in crowded scenes (issue 10's profile), and
+/// almost none of it was ever read. The region of the frame it needs is kept instead (a grey
+/// crop and the mask over it), so the features are exactly those computed at once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LazySift {
+    /// The cut-out input (`None`: the region lay outside the frame, no features).
+    crop: Option<RegionCrop>,
+    /// Settings.
+    config: SiftConfig,
+    /// The features, once computed (`None` inside: the computation failed).
+    features: OnceLock<Option<SiftFeatures>>,
+}
+
+impl LazySift {
+    /// SIFT of `region` of `frame` with `mask`, to be computed when first read.
+    pub fn new(frame: &Frame<'_>, region: &BBox, mask: Option<&Mask>, config: &SiftConfig) -> Self {
+        Self {
+            crop: RegionCrop::new(frame, region, mask),
+            config: config.clone(),
+            features: OnceLock::new(),
+        }
+    }
+
+    /// The features (computed now on the first call); empty when the region lay outside the
+    /// frame, `None` when the computation failed.
+    pub fn get(&self) -> Option<&SiftFeatures> {
+        self.features
+            .get_or_init(|| match &self.crop {
+                Some(c) => c.detect(&self.config).ok(),
+                None => Some(SiftFeatures::default()),
+            })
+            .as_ref()
+    }
+
+    /// Whether the features have been computed.
+    pub fn is_computed(&self) -> bool {
+        self.features.get().is_some()
+    }
 }
 
 /// The feature extractor for mask detections (module docs). Box-only detections get the box
@@ -341,9 +430,9 @@ pub fn describe_mask(
     };
     let sift = if needs.sift {
         // Pad the crop so keypoints near the outline see some context; keypoints outside the
-        // mask are dropped by `detect_in_region`.
+        // mask are dropped by the detection.
         let region = bbox.expanded(4.0);
-        Some(detect_in_region(frame, &region, Some(mask), &cfg.sift).map_err(|e| e.to_string())?)
+        Some(LazySift::new(frame, &region, Some(mask), &cfg.sift))
     } else {
         None
     };
@@ -353,12 +442,7 @@ pub fn describe_mask(
     } else {
         None
     };
-    Ok(Appearance {
-        frame: frame_number,
-        shape,
-        sift,
-        colour,
-    })
+    Ok(Appearance::new(frame_number, shape, sift, colour))
 }
 
 /// The shape context descriptor of the mask's largest outer contour, `None` when the contour is
@@ -550,7 +634,34 @@ mod tests {
         assert_eq!(a.frame, 7);
         assert_eq!(a.shape.as_ref().unwrap().len(), 32);
         assert!(a.colour.as_ref().unwrap().len() <= 150);
-        assert!(a.sift.is_some());
+        // The palette is computed on first read, once.
+        let cfg = AppearanceConfig::default().colour;
+        let p = a.palette(&cfg).unwrap();
+        assert_eq!(p.labels.len(), a.colour.as_ref().unwrap().len());
+        assert!(std::ptr::eq(p, a.palette(&cfg).unwrap()));
+        // SIFT waits for its first read, and then equals the eager computation (on a frame
+        // with blobs to find).
+        let blobs: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                let v = 128.0 + 100.0 * (x / 4.0).sin() * (y / 5.0).cos();
+                [v as u8, (v * 0.8) as u8, 255 - v as u8]
+            })
+            .collect();
+        let frame = Frame::rgb(&blobs, w, h).unwrap();
+        let a = fx.describe(&frame, &det, 7).unwrap().unwrap();
+        let lazy = a.sift.as_ref().unwrap();
+        assert!(!lazy.is_computed());
+        let eager = crate::features::sift::detect_in_region(
+            &frame,
+            &det.bbox.expanded(4.0),
+            Some(&m),
+            &AppearanceConfig::default().sift,
+        )
+        .unwrap();
+        assert!(!eager.is_empty());
+        assert_eq!(a.sift(), Some(&eager));
+        assert!(lazy.is_computed());
         // Box detections: centre, area, nothing else.
         let b = Detection::from_box(BBox::new(10.0, 10.0, 20.0, 10.0), 1.0);
         let fb = fx.extract(Some(&frame), &b).unwrap();
@@ -561,7 +672,7 @@ mod tests {
         let out = Detection::from_mask(m.translated(1000, 1000), 1.0);
         let a = fx.describe(&frame, &out, 1).unwrap().unwrap();
         assert!(a.colour.is_none());
-        assert!(a.sift.unwrap().is_empty());
+        assert!(a.sift().unwrap().is_empty());
         // An empty mask is an error of `extract`.
         let empty = Detection {
             mask: Some(Mask::empty()),
