@@ -44,6 +44,7 @@ use linfa::traits::{Fit, Predict};
 use linfa::DatasetBase;
 use linfa_clustering::{KMeans, KMeansInit};
 use ndarray::Array2;
+use rand::distributions::{Distribution, WeightedIndex};
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 use serde::{Deserialize, Serialize};
@@ -393,10 +394,16 @@ fn kmeans<'a>(
         row[2] = c[2] as f64;
     }
     let k = cfg.clusters.min(n);
-    let rng = Xoshiro256Plus::seed_from_u64(cfg.seed);
+    let mut rng = Xoshiro256Plus::seed_from_u64(cfg.seed);
+    // One run: the seeds are drawn here, as linfa would draw them (see `plus_plus_seeds`).
+    let init = if cfg.n_runs == 1 {
+        KMeansInit::Precomputed(plus_plus_seeds(&data, k, &mut rng)?)
+    } else {
+        KMeansInit::KMeansPlusPlus
+    };
     let dataset = DatasetBase::from(data);
     let model = KMeans::params_with_rng(k, rng)
-        .init_method(KMeansInit::KMeansPlusPlus)
+        .init_method(init)
         .n_runs(cfg.n_runs)
         .max_n_iterations(cfg.max_iterations)
         .tolerance(cfg.tolerance)
@@ -412,6 +419,54 @@ fn kmeans<'a>(
         .map(|r| [r[0], r[1], r[2]])
         .collect();
     Ok((centroids, labels.to_vec()))
+}
+
+/// linfa's k-means++ seeding (`KMeansInit::KMeansPlusPlus`), draw for draw: the first seed
+/// uniformly, each next one with probability proportional to the squared distance to the
+/// nearest seed so far, by the same `WeightedIndex` draws from the same generator, over
+/// distances computed in the same order; the seeds, and so the palette, are bit for bit
+/// linfa's (`tests::seeds_are_linfas`). Why not linfa's own: it recomputes every point's
+/// distance to every seed for each new seed, on rayon's parallel iterators, and on the
+/// tracker's 150–300 colours per call that was three quarters of the k-means time (issue 10's
+/// profile); here each new seed updates the distances once.
+fn plus_plus_seeds(
+    data: &Array2<f64>,
+    k: usize,
+    rng: &mut Xoshiro256Plus,
+) -> Result<Array2<f64>, ColorError> {
+    let n = data.nrows();
+    let mut seeds = Array2::<f64>::zeros((k, data.ncols()));
+    if k == 0 || n == 0 {
+        return Ok(seeds);
+    }
+    let first = WeightedIndex::new(std::iter::repeat_n(1.0f64, n))
+        .map_err(|e| ColorError::KMeans {
+            reason: e.to_string(),
+        })?
+        .sample(rng);
+    seeds.row_mut(0).assign(&data.row(first));
+    // linfa's squared distance: (seed − point)² summed over the channels in order, from 0.
+    let sq = |a: ndarray::ArrayView1<'_, f64>, b: ndarray::ArrayView1<'_, f64>| {
+        let mut r = 0.0;
+        for (x, y) in a.iter().zip(b.iter()) {
+            let d = x - y;
+            r += d * d;
+        }
+        r
+    };
+    let mut dists = vec![f64::INFINITY; n];
+    for c in 1..k {
+        let last = seeds.row(c - 1).to_owned();
+        for (d, point) in dists.iter_mut().zip(data.rows()) {
+            *d = d.min(sq(last.view(), point));
+        }
+        // All distances 0: every point is a seed already; linfa then takes point 0.
+        let next = WeightedIndex::new(dists.iter())
+            .map(|w| w.sample(rng))
+            .unwrap_or(0);
+        seeds.row_mut(c).assign(&data.row(next));
+    }
+    Ok(seeds)
 }
 
 /// One shape's own palette ([`view_palette`]) and its samples' labels in it.
@@ -708,6 +763,48 @@ mod tests {
         // Small enough to keep every pixel.
         assert_eq!(ColorSample::from_mask(&frame, &mask, 8000).len(), 8000);
         assert!(ColorSample::from_mask(&frame, &Mask::empty(), 10).is_empty());
+    }
+
+    #[test]
+    fn seeds_are_linfas() {
+        use rand::Rng;
+        let mut gen = Xoshiro256Plus::seed_from_u64(5);
+        for case in 0..60u64 {
+            let n = 1 + (case as usize * 7) % 300;
+            // Few distinct colours in some cases: repeated points and all-zero distances.
+            let levels = [2u32, 5, 256][case as usize % 3];
+            let rgb: Vec<[u8; 3]> = (0..n)
+                .map(|_| [0; 3].map(|_: u8| (gen.gen_range(0..levels) * 255 / levels) as u8))
+                .collect();
+            let cfg = ColorConfig {
+                seed: case,
+                clusters: 1 + case as usize % 12,
+                ..ColorConfig::default()
+            };
+            let ours = kmeans(rgb.iter(), n, &cfg).unwrap();
+            // linfa's own seeding on the same colours and generator.
+            let mut data = Array2::<f64>::zeros((n, 3));
+            for (mut row, c) in data.rows_mut().into_iter().zip(&rgb) {
+                row.iter_mut().zip(c).for_each(|(v, &c)| *v = c as f64);
+            }
+            let k = cfg.clusters.min(n);
+            let model = KMeans::params_with_rng(k, Xoshiro256Plus::seed_from_u64(case))
+                .init_method(KMeansInit::KMeansPlusPlus)
+                .n_runs(1)
+                .max_n_iterations(cfg.max_iterations)
+                .tolerance(cfg.tolerance)
+                .fit(&DatasetBase::from(data.clone()))
+                .unwrap();
+            let labels = model.predict(&data).to_vec();
+            let centroids: Vec<[f64; 3]> = model
+                .centroids()
+                .rows()
+                .into_iter()
+                .map(|r| [r[0], r[1], r[2]])
+                .collect();
+            assert_eq!(ours.0, centroids, "case {case}");
+            assert_eq!(ours.1, labels, "case {case}");
+        }
     }
 
     #[test]
