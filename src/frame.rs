@@ -423,14 +423,7 @@ impl<'a> Frame<'a> {
     /// The grey-level image of the region `rect` (clipped to the frame), as an 8-bit image.
     /// Returns the clipped rectangle actually used, `(x0, y0, w, h)`, with the image.
     pub fn gray_crop(&self, rect: &BBox) -> Option<((u32, u32, u32, u32), image::GrayImage)> {
-        let x0 = rect.x.floor().max(0.0) as i64;
-        let y0 = rect.y.floor().max(0.0) as i64;
-        let x1 = (rect.x2().ceil() as i64).min(self.width as i64);
-        let y1 = (rect.y2().ceil() as i64).min(self.height as i64);
-        if x1 <= x0 || y1 <= y0 {
-            return None;
-        }
-        let (x0, y0, w, h) = (x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32);
+        let (x0, y0, w, h) = self.clip(rect)?;
         let c = self.format.channels();
         let mut buf = Vec::with_capacity(w as usize * h as usize);
         for y in y0..y0 + h {
@@ -445,6 +438,34 @@ impl<'a> Frame<'a> {
         image::GrayImage::from_raw(w, h, buf).map(|img| ((x0, y0, w, h), img))
     }
 
+    /// The pixel rectangle `(x0, y0, w, h)` covering `rect`, clipped to the frame; `None` when
+    /// nothing is left.
+    fn clip(&self, rect: &BBox) -> Option<PixelRect> {
+        let x0 = rect.x.floor().max(0.0) as i64;
+        let y0 = rect.y.floor().max(0.0) as i64;
+        let x1 = (rect.x2().ceil() as i64).min(self.width as i64);
+        let y1 = (rect.y2().ceil() as i64).min(self.height as i64);
+        if x1 <= x0 || y1 <= y0 {
+            return None;
+        }
+        Some((x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32))
+    }
+
+    /// The region `rect` (clipped to the frame, as [`Frame::gray_crop`] clips it) copied out
+    /// in the frame's pixel layout, rows packed: the clipped rectangle and the bytes. A
+    /// [`Frame`] over the bytes (`width` w, stride w × channels) is that part of this frame.
+    pub fn crop(&self, rect: &BBox) -> Option<(PixelRect, Vec<u8>)> {
+        let (x0, y0, w, h) = self.clip(rect)?;
+        let c = self.format.channels();
+        let (a, len) = (x0 as usize * c, w as usize * c);
+        let mut buf = Vec::with_capacity(len * h as usize);
+        for y in y0..y0 + h {
+            let start = y as usize * self.stride + a;
+            buf.extend_from_slice(self.data.get(start..start + len)?);
+        }
+        Some(((x0, y0, w, h), buf))
+    }
+
     /// The whole frame as an 8-bit grey image.
     pub fn to_gray(&self) -> image::GrayImage {
         let full = BBox::new(0.0, 0.0, self.width as f64, self.height as f64);
@@ -455,6 +476,9 @@ impl<'a> Frame<'a> {
         }
     }
 }
+
+/// A rectangle of whole pixels, `(x0, y0, width, height)`.
+pub type PixelRect = (u32, u32, u32, u32);
 
 /// A binary mask stored as a bitmap inside its bounding rectangle.
 ///

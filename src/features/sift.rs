@@ -41,7 +41,7 @@ use image::{GrayImage, Luma};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::frame::{BBox, Frame, Mask};
+use crate::frame::{BBox, Frame, Mask, PixelFormat};
 
 use descriptor::{calc_descriptor, quantize, DESCR_LEN};
 use detect::{find_scale_space_extrema, DetectParams, RawKeypoint};
@@ -325,41 +325,56 @@ pub fn detect_in_region(
     }
 }
 
-/// The input of [`detect_in_region`] cut out of the frame: the grey crop of the region and,
-/// when a mask was given, the mask over the same crop. It lets the keypoints be computed
-/// after the frame is gone, and only if they are ever needed (the tracker keeps one per
-/// described view, and most views are never compared by SIFT).
+/// The input of [`detect_in_region`] cut out of the frame: the region's pixels (clipped to the
+/// frame) and, when a mask was given, the mask. It lets the keypoints be computed after the
+/// frame is gone, and only if they are ever needed (the tracker keeps one per described view,
+/// and most views are never compared by SIFT). The pixels are copied as they are (row
+/// copies); the grey conversion, which costs more, waits for [`RegionCrop::detect`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegionCrop {
-    /// Top-left corner of the crop in the frame.
-    origin: (u32, u32),
-    /// The grey crop.
-    gray: GrayImage,
-    /// The mask over the crop (255 = foreground).
-    mask: Option<GrayImage>,
+    /// The clipped rectangle `(x0, y0, w, h)` in the frame.
+    rect: crate::frame::PixelRect,
+    /// Its pixels in the frame's layout, rows packed.
+    pixels: Vec<u8>,
+    /// The frame's layout.
+    format: PixelFormat,
+    /// The mask, in frame coordinates.
+    mask: Option<Mask>,
 }
 
 impl RegionCrop {
-    /// Cuts `region` (clipped to the frame) out of `frame`, with `mask` over it; `None` when
-    /// the region lies outside the frame.
+    /// Cuts `region` (clipped to the frame) out of `frame`, with `mask`; `None` when the region
+    /// lies outside the frame.
     pub fn new(frame: &Frame<'_>, region: &BBox, mask: Option<&Mask>) -> Option<Self> {
-        let ((x0, y0, w, h), gray) = frame.gray_crop(region)?;
-        let mask = mask.map(|m| {
-            GrayImage::from_fn(w, h, |x, y| {
-                Luma([u8::from(m.get((x0 + x) as i32, (y0 + y) as i32)) * 255])
-            })
-        });
+        let (rect, pixels) = frame.crop(region)?;
         Some(Self {
-            origin: (x0, y0),
-            gray,
-            mask,
+            rect,
+            pixels,
+            format: frame.format(),
+            mask: mask.cloned(),
         })
     }
 
     /// The SIFT features of the crop, in frame coordinates (as [`detect_in_region`]).
     pub fn detect(&self, cfg: &SiftConfig) -> Result<SiftFeatures, SiftError> {
-        let mut feats = detect_and_compute(&self.gray, self.mask.as_ref(), cfg)?;
-        let (x0, y0) = self.origin;
+        let (x0, y0, w, h) = self.rect;
+        let stride = w as usize * self.format.channels();
+        let Some(gray) = Frame::new(&self.pixels, w, h, stride, self.format)
+            .ok()
+            .and_then(|f| f.gray_crop(&BBox::new(0.0, 0.0, w as f64, h as f64)))
+            .map(|(_, g)| g)
+        else {
+            return Err(SiftError::EmptyImage {
+                width: w,
+                height: h,
+            });
+        };
+        let mask_crop = self.mask.as_ref().map(|m| {
+            GrayImage::from_fn(w, h, |x, y| {
+                Luma([u8::from(m.get((x0 + x) as i32, (y0 + y) as i32)) * 255])
+            })
+        });
+        let mut feats = detect_and_compute(&gray, mask_crop.as_ref(), cfg)?;
         for k in &mut feats.keypoints {
             k.x += x0 as f32;
             k.y += y0 as f32;

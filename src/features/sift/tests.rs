@@ -519,3 +519,46 @@ mod props {
         }
     }
 }
+
+/// A region cut out now and described later gives exactly the features of the grey crop and
+/// mask taken from the frame at once, for RGB and RGBA frames and regions clipped by the
+/// frame's border.
+#[test]
+fn region_crop_equals_the_grey_crop_of_the_frame() {
+    let (w, h) = (160u32, 120u32);
+    let grey = texture(w, h, 11, 40);
+    let rgb: Vec<u8> = grey
+        .as_raw()
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &v)| [v, v.wrapping_add((i % 7) as u8), 255 - v])
+        .collect();
+    let rgba: Vec<u8> = rgb.chunks(3).flat_map(|p| [p[0], p[1], p[2], 9]).collect();
+    let mask = Mask::from_bbox(&BBox::new(30.0, 20.0, 90.0, 70.0));
+    let cfg = SiftConfig::default();
+    for frame in [
+        Frame::rgb(&rgb, w, h).unwrap(),
+        Frame::rgba(&rgba, w, h).unwrap(),
+    ] {
+        for region in [
+            BBox::new(26.0, 16.0, 98.0, 78.0),
+            BBox::new(-10.0, 60.0, 200.0, 90.0),
+        ] {
+            let ((x0, y0, cw, ch), crop) = frame.gray_crop(&region).unwrap();
+            let mask_crop = GrayImage::from_fn(cw, ch, |x, y| {
+                Luma([u8::from(mask.get((x0 + x) as i32, (y0 + y) as i32)) * 255])
+            });
+            let mut direct = detect_and_compute(&crop, Some(&mask_crop), &cfg).unwrap();
+            for k in &mut direct.keypoints {
+                k.x += x0 as f32;
+                k.y += y0 as f32;
+            }
+            let later = RegionCrop::new(&frame, &region, Some(&mask)).unwrap();
+            let feats = later.detect(&cfg).unwrap();
+            assert!(!feats.is_empty());
+            assert_eq!(feats, direct);
+        }
+        let outside = BBox::new(500.0, 500.0, 10.0, 10.0);
+        assert!(RegionCrop::new(&frame, &outside, None).is_none());
+    }
+}
