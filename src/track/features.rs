@@ -314,8 +314,8 @@ impl Appearance {
 /// detections in a crowd (colour is read by the main association, and a view's appearance is
 /// taken before a crossing), but SIFT is read only to re-identify a lost track: computed
 /// eagerly, it was most of the describe cost in crowded scenes (issue 10's profile), and
-/// almost none of it was ever read. The region of the frame it needs is kept instead (a grey
-/// crop and the mask over it), so the features are exactly those computed at once.
+/// almost none of it was ever read. The region of the frame it needs is kept instead (its
+/// pixels and the mask, [`RegionCrop`]), so the features are exactly those computed at once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LazySift {
     /// The cut-out input (`None`: the region lay outside the frame, no features).
