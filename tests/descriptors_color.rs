@@ -4,7 +4,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::features::color::*;
-use shapetrack::features::transform::{Similarity, Transform, Translation};
+use shapetrack::features::transform::{PointIndex, Similarity, Transform, Translation};
 use shapetrack::{BBox, Frame, Mask, Point};
 
 const W: u32 = 240;
@@ -134,14 +134,15 @@ fn per_view_palettes_separate_what_the_joint_palette_separates() {
     let shuffled = sample(80.0 + dx, 70.0 + dy, 1.0, rearranged);
     let pal = |s: &ColorSample| view_palette(s, &cfg).unwrap();
     let pa = pal(&a);
+    let ia = PointIndex::new(&a.positions);
     assert_eq!(pa.labels.len(), a.len());
     assert!(pa.centroids.len() <= cfg.clusters);
-    let itself = color_cost_per_view((&a, &pa), (&a, &pa), None, &cfg).unwrap();
+    let itself = color_cost_per_view((&a, &pa, &ia), (&a, &pa), None, &cfg).unwrap();
     assert_sane(&itself);
     assert_eq!((itself.cost, itself.overlap), (0.0, 1.0));
     assert!(itself.palette_distance < 1e-9, "{itself:?}");
     let cost = |b: &ColorSample| {
-        let m = color_cost_per_view((&a, &pa), (b, &pal(b)), None, &cfg).unwrap();
+        let m = color_cost_per_view((&a, &pa, &ia), (b, &pal(b)), None, &cfg).unwrap();
         assert_sane(&m);
         assert!(m.overlap > 0.95, "{m:?}");
         m
@@ -165,7 +166,7 @@ fn per_view_palettes_separate_what_the_joint_palette_separates() {
         labels: vec![0],
         ..pa.clone()
     };
-    assert!(color_cost_per_view((&a, &short), (&a, &pa), None, &cfg).is_err());
+    assert!(color_cost_per_view((&a, &short, &ia), (&a, &pa), None, &cfg).is_err());
     let empty = ColorSample::default();
     assert!(view_palette(&empty, &cfg).is_err());
 }

@@ -329,18 +329,11 @@ pub struct Palette {
 impl Palette {
     /// Normalised label histograms of A and B over the palette.
     pub fn histograms(&self) -> (Vec<f64>, Vec<f64>) {
-        let hist = |labels: &[usize]| {
-            let mut h = vec![0.0; self.centroids.len()];
-            for &l in labels {
-                if let Some(v) = h.get_mut(l) {
-                    *v += 1.0;
-                }
-            }
-            let n = labels.len().max(1) as f64;
-            h.iter_mut().for_each(|v| *v /= n);
-            h
-        };
-        (hist(&self.labels_a), hist(&self.labels_b))
+        let k = self.centroids.len();
+        (
+            label_histogram(&self.labels_a, k),
+            label_histogram(&self.labels_b, k),
+        )
     }
 
     /// Whether labels `i` and `j` reconstruct to colours more than `tolerance` apart
@@ -351,10 +344,7 @@ impl Palette {
             return false;
         }
         match (self.centroids.get(i), self.centroids.get(j)) {
-            (Some(a), Some(b)) => {
-                let d2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-                d2.sqrt() > tolerance.max(1e-6)
-            }
+            (Some(a), Some(b)) => distance2(a, b).sqrt() > tolerance.max(1e-6),
             _ => true,
         }
     }
@@ -481,16 +471,27 @@ pub struct ViewPalette {
 impl ViewPalette {
     /// Normalised label histogram.
     fn histogram(&self) -> Vec<f64> {
-        let mut h = vec![0.0; self.centroids.len()];
-        for &l in &self.labels {
-            if let Some(v) = h.get_mut(l) {
-                *v += 1.0;
-            }
-        }
-        let n = self.labels.len().max(1) as f64;
-        h.iter_mut().for_each(|v| *v /= n);
-        h
+        label_histogram(&self.labels, self.centroids.len())
     }
+}
+
+/// The normalised histogram of `labels` over `k` palette colours (labels ≥ `k` are not
+/// counted in a bin, but count in the total).
+fn label_histogram(labels: &[usize], k: usize) -> Vec<f64> {
+    let mut h = vec![0.0; k];
+    for &l in labels {
+        if let Some(v) = h.get_mut(l) {
+            *v += 1.0;
+        }
+    }
+    let n = labels.len().max(1) as f64;
+    h.iter_mut().for_each(|v| *v /= n);
+    h
+}
+
+/// Squared Euclidean distance between two palette colours.
+fn distance2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
 /// k-means++ on one shape's samples alone ([`ColorConfig::per_view`]): computed once per
@@ -513,12 +514,7 @@ fn differ_across(a: &ViewPalette, b: &ViewPalette, tolerance: f64) -> Vec<bool> 
     let t2 = tolerance.max(1e-6).powi(2);
     a.centroids
         .iter()
-        .flat_map(|ca| {
-            b.centroids.iter().map(move |cb| {
-                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
-                d2 > t2
-            })
-        })
+        .flat_map(|ca| b.centroids.iter().map(move |cb| distance2(ca, cb) > t2))
         .collect()
 }
 
@@ -528,8 +524,11 @@ fn differ_across(a: &ViewPalette, b: &ViewPalette, tolerance: f64) -> Vec<bool> 
 /// shared labels' colours). `palette_distance` is the share of the two shapes' colour mass
 /// that cannot be paired with a colour of the other within the tolerance (each palette's
 /// shades of one colour split differently, so label histograms are not compared bin by bin).
+/// `index` is A's sample positions' [`PointIndex`], built once per shape by the caller (a
+/// shape is compared with several candidates; building it per pair was a fifth of the
+/// comparison's time); an index of other points gives a meaningless cost, not an error.
 pub fn color_cost_per_view(
-    (a, pa): (&ColorSample, &ViewPalette),
+    (a, pa, index): (&ColorSample, &ViewPalette, &PointIndex),
     (b, pb): (&ColorSample, &ViewPalette),
     b_to_a: Option<&Transform>,
     cfg: &ColorConfig,
@@ -546,7 +545,6 @@ pub fn color_cost_per_view(
     let (transform, alignment) = align(a, b, b_to_a)?;
     let kb = pb.centroids.len();
     let differ = differ_across(pa, pb, cfg.color_tolerance);
-    let index = PointIndex::new(&a.positions);
     let radius = cfg.overlap_radius * a.spacing;
     let (mut compared, mut differing) = (0usize, 0usize);
     for (p, &lb) in b.positions.iter().zip(&pb.labels) {
@@ -576,8 +574,7 @@ pub fn color_cost_per_view(
     for (i, ca) in pa.centroids.iter().enumerate() {
         for (j, cb) in pb.centroids.iter().enumerate() {
             if !differ.get(i * kb + j).copied().unwrap_or(true) {
-                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
-                close.push((d2, i, j));
+                close.push((distance2(ca, cb), i, j));
             }
         }
     }

@@ -747,7 +747,7 @@ pub fn ransac(
 /// (built in `O(n log n)`).
 ///
 /// Non-finite points are left out; the indices it reports refer to the input slice.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct PointIndex {
     /// Points with their input index, arranged as an implicit balanced tree: the median of
     /// each range is its node, split on x at even depths and y at odd ones.

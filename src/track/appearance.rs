@@ -154,8 +154,8 @@ impl PairCost for ColourCost {
         let cfg = &self.config;
         let c = match self.mode {
             ColourMode::Aligned if cfg.per_view => {
-                let (pa, pb) = (a.palette(cfg)?, b.palette(cfg)?);
-                color_cost_per_view((ca, pa), (cb, pb), None, cfg)
+                let (pa, pb, ia) = (a.palette(cfg)?, b.palette(cfg)?, a.colour_index()?);
+                color_cost_per_view((ca, pa, ia), (cb, pb), None, cfg)
                     .ok()?
                     .cost
             }

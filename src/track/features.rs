@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 use crate::features::color::{view_palette, ColorConfig, ColorSample, ViewPalette};
 use crate::features::shape_context::{ShapeContextConfig, ShapeDescriptor};
 use crate::features::sift::{RegionCrop, SiftConfig, SiftFeatures};
+use crate::features::transform::PointIndex;
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
 use crate::geometry::{mask_geometry, ConvexShell, GeometryConfig, MaskCrop, Moments};
 
@@ -276,6 +277,9 @@ pub struct Appearance {
     pub colour: Option<ColorSample>,
     /// The colour sample's own palette, computed on first read ([`Appearance::palette`]).
     palette: OnceLock<Option<ViewPalette>>,
+    /// The colour sample's positions indexed, built on first read
+    /// ([`Appearance::colour_index`]).
+    colour_index: OnceLock<Option<PointIndex>>,
 }
 
 impl Appearance {
@@ -292,7 +296,17 @@ impl Appearance {
             sift,
             colour,
             palette: OnceLock::new(),
+            colour_index: OnceLock::new(),
         }
+    }
+
+    /// The colour sample's positions in a [`PointIndex`], built on the first read (the
+    /// per-view colour cost looks up the track's samples under each candidate's); `None`
+    /// without a colour sample.
+    pub fn colour_index(&self) -> Option<&PointIndex> {
+        self.colour_index
+            .get_or_init(|| Some(PointIndex::new(&self.colour.as_ref()?.positions)))
+            .as_ref()
     }
 
     /// The colour sample's own palette ([`ColorConfig::per_view`]), computed with `cfg` on
