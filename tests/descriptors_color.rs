@@ -4,7 +4,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::features::color::*;
-use shapetrack::features::transform::{PointIndex, Similarity, Transform, Translation};
+use shapetrack::features::transform::{Similarity, Transform, Translation};
 use shapetrack::{BBox, Frame, Mask, Point};
 
 const W: u32 = 240;
@@ -134,7 +134,7 @@ fn per_view_palettes_separate_what_the_joint_palette_separates() {
     let shuffled = sample(80.0 + dx, 70.0 + dy, 1.0, rearranged);
     let pal = |s: &ColorSample| view_palette(s, &cfg).unwrap();
     let pa = pal(&a);
-    let ia = PointIndex::new(&a.positions);
+    let ia = a.index();
     assert_eq!(pa.labels.len(), a.len());
     assert!(pa.centroids.len() <= cfg.clusters);
     let itself = color_cost_per_view((&a, &pa, &ia), (&a, &pa), None, &cfg).unwrap();

@@ -38,7 +38,7 @@
 //! this is a few milliseconds per pair (see `benches/descriptors.rs`). linfa parallelises the
 //! assignment step with rayon natively; on wasm32 rayon runs it on the calling thread.
 
-use super::transform::{PointIndex, Transform, Translation};
+use super::transform::{CellIndex, Transform, Translation};
 use crate::frame::{Frame, Mask, Point};
 use linfa::traits::{Fit, Predict};
 use linfa::DatasetBase;
@@ -195,6 +195,12 @@ impl Default for ColorSample {
 }
 
 impl ColorSample {
+    /// The samples' positions in a [`CellIndex`] with cells one sample spacing wide: the
+    /// look-up the colour costs make of A's samples under B's.
+    pub fn index(&self) -> CellIndex {
+        CellIndex::new(&self.positions, self.spacing)
+    }
+
     /// Samples from explicit positions and colours, checked for equal lengths, finite
     /// positions and a finite spacing > 0.
     pub fn new(positions: Vec<Point>, rgb: Vec<[u8; 3]>, spacing: f64) -> Result<Self, ColorError> {
@@ -377,23 +383,23 @@ fn kmeans<'a>(
     n: usize,
     cfg: &ColorConfig,
 ) -> Result<(Vec<[f64; 3]>, Vec<usize>), ColorError> {
-    let mut data = Array2::<f64>::zeros((n, 3));
-    for (mut row, c) in data.rows_mut().into_iter().zip(rgb) {
-        row[0] = c[0] as f64;
-        row[1] = c[1] as f64;
-        row[2] = c[2] as f64;
-    }
+    let mut data: Vec<[f64; 3]> = rgb.take(n).map(|c| c.map(f64::from)).collect();
+    data.resize(n, [0.0; 3]);
     let k = cfg.clusters.min(n);
     let mut rng = Xoshiro256Plus::seed_from_u64(cfg.seed);
-    // One run: the seeds are drawn here, as linfa would draw them (see `plus_plus_seeds`).
-    let init = if cfg.n_runs == 1 {
-        KMeansInit::Precomputed(plus_plus_seeds(&data, k, &mut rng)?)
-    } else {
-        KMeansInit::KMeansPlusPlus
-    };
-    let dataset = DatasetBase::from(data);
+    // One run (the tracker's setting): linfa's k-means, step for step, without its per-call
+    // overheads (see `plus_plus_seeds` and `lloyd`).
+    if cfg.n_runs == 1 && k > 0 {
+        let seeds = plus_plus_seeds(&data, k, &mut rng)?;
+        return Ok(lloyd(&data, seeds, cfg.max_iterations, cfg.tolerance));
+    }
+    let mut array = Array2::<f64>::zeros((n, 3));
+    for (mut row, c) in array.rows_mut().into_iter().zip(&data) {
+        row.iter_mut().zip(c).for_each(|(v, &c)| *v = c);
+    }
+    let dataset = DatasetBase::from(array);
     let model = KMeans::params_with_rng(k, rng)
-        .init_method(init)
+        .init_method(KMeansInit::KMeansPlusPlus)
         .n_runs(cfg.n_runs)
         .max_n_iterations(cfg.max_iterations)
         .tolerance(cfg.tolerance)
@@ -411,52 +417,125 @@ fn kmeans<'a>(
     Ok((centroids, labels.to_vec()))
 }
 
+/// linfa's squared distance (`L2Dist::rdistance`): `(a − b)²` summed over the channels in
+/// order, from 0.
+fn linfa_sq(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    let mut r = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        let d = x - y;
+        r += d * d;
+    }
+    r
+}
+
 /// linfa's k-means++ seeding (`KMeansInit::KMeansPlusPlus`), draw for draw: the first seed
 /// uniformly, each next one with probability proportional to the squared distance to the
 /// nearest seed so far, by the same `WeightedIndex` draws from the same generator, over
 /// distances computed in the same order; the seeds, and so the palette, are bit for bit
-/// linfa's (`tests::seeds_are_linfas`). Why not linfa's own: it recomputes every point's
+/// linfa's (`tests::kmeans_is_linfas`). Why not linfa's own: it recomputes every point's
 /// distance to every seed for each new seed, on rayon's parallel iterators, and on the
 /// tracker's 150–300 colours per call that was three quarters of the k-means time (issue 10's
 /// profile); here each new seed updates the distances once.
 fn plus_plus_seeds(
-    data: &Array2<f64>,
+    data: &[[f64; 3]],
     k: usize,
     rng: &mut Xoshiro256Plus,
-) -> Result<Array2<f64>, ColorError> {
-    let n = data.nrows();
-    let mut seeds = Array2::<f64>::zeros((k, data.ncols()));
+) -> Result<Vec<[f64; 3]>, ColorError> {
+    let n = data.len();
     if k == 0 || n == 0 {
-        return Ok(seeds);
+        return Ok(vec![[0.0; 3]; k]);
     }
     let first = WeightedIndex::new(std::iter::repeat_n(1.0f64, n))
         .map_err(|e| ColorError::KMeans {
             reason: e.to_string(),
         })?
         .sample(rng);
-    seeds.row_mut(0).assign(&data.row(first));
-    // linfa's squared distance: (seed − point)² summed over the channels in order, from 0.
-    let sq = |a: ndarray::ArrayView1<'_, f64>, b: ndarray::ArrayView1<'_, f64>| {
-        let mut r = 0.0;
-        for (x, y) in a.iter().zip(b.iter()) {
-            let d = x - y;
-            r += d * d;
-        }
-        r
-    };
+    let mut seeds = Vec::with_capacity(k);
+    seeds.push(data[first]);
     let mut dists = vec![f64::INFINITY; n];
-    for c in 1..k {
-        let last = seeds.row(c - 1).to_owned();
-        for (d, point) in dists.iter_mut().zip(data.rows()) {
-            *d = d.min(sq(last.view(), point));
+    for _ in 1..k {
+        let last = seeds[seeds.len() - 1];
+        for (d, point) in dists.iter_mut().zip(data) {
+            *d = d.min(linfa_sq(&last, point));
         }
         // All distances 0: every point is a seed already; linfa then takes point 0.
         let next = WeightedIndex::new(dists.iter())
             .map(|w| w.sample(rng))
             .unwrap_or(0);
-        seeds.row_mut(c).assign(&data.row(next));
+        seeds.push(data[next]);
     }
     Ok(seeds)
+}
+
+/// The nearest centroid to `p` and its squared distance, as linfa's `closest_centroid` picks
+/// it: the first of equally near ones.
+fn closest(centroids: &[[f64; 3]], p: &[f64; 3]) -> usize {
+    let mut best = (0, f64::INFINITY);
+    for (i, c) in centroids.iter().enumerate() {
+        let d = linfa_sq(c, p);
+        if d < best.1 || i == 0 {
+            best = (i, d);
+        }
+    }
+    best.0
+}
+
+/// linfa's Lloyd iterations for one run (`KMeansValidParams::fit`), step for step, then its
+/// `predict`: memberships by [`closest`]; each new centroid is the mean of its members *and
+/// the old centroid* (linfa's "m_k-means", which keeps empty clusters where they were), summed
+/// in input order; stop when the centroids moved less than `tolerance` (the Euclidean norm
+/// over all of them) or after `max_iterations`; labels against the final centroids. Written
+/// here because linfa runs each step on rayon's parallel iterators over `ndarray` rows, which
+/// on the tracker's few hundred colours per call cost several times the arithmetic (issue
+/// 10); `tests::kmeans_is_linfas` checks centroids and labels are linfa's bit for bit.
+fn lloyd(
+    data: &[[f64; 3]],
+    mut centroids: Vec<[f64; 3]>,
+    max_iterations: u64,
+    tolerance: f64,
+) -> (Vec<[f64; 3]>, Vec<usize>) {
+    let k = centroids.len();
+    let mut labels = vec![0usize; data.len()];
+    let mut n_iter = 0u64;
+    loop {
+        for (l, p) in labels.iter_mut().zip(data) {
+            *l = closest(&centroids, p);
+        }
+        let mut next = vec![[0.0f64; 3]; k];
+        let mut counts = vec![1usize; k];
+        for (p, &l) in data.iter().zip(&labels) {
+            for (s, v) in next[l].iter_mut().zip(p) {
+                *s += v;
+            }
+            counts[l] += 1;
+        }
+        for ((c, old), &count) in next.iter_mut().zip(&centroids).zip(&counts) {
+            for (s, o) in c.iter_mut().zip(old) {
+                *s = (*s + o) / count as f64;
+            }
+        }
+        let moved = centroids
+            .iter()
+            .zip(&next)
+            .fold(0.0, |acc, (a, b)| {
+                let mut acc = acc;
+                for (x, y) in a.iter().zip(b) {
+                    let d = x - y;
+                    acc += d * d;
+                }
+                acc
+            })
+            .sqrt();
+        centroids = next;
+        n_iter += 1;
+        if moved < tolerance || n_iter == max_iterations {
+            break;
+        }
+    }
+    for (l, p) in labels.iter_mut().zip(data) {
+        *l = closest(&centroids, p);
+    }
+    (centroids, labels)
 }
 
 /// One shape's own palette ([`view_palette`]) and its samples' labels in it.
@@ -524,11 +603,11 @@ fn differ_across(a: &ViewPalette, b: &ViewPalette, tolerance: f64) -> Vec<bool> 
 /// shared labels' colours). `palette_distance` is the share of the two shapes' colour mass
 /// that cannot be paired with a colour of the other within the tolerance (each palette's
 /// shades of one colour split differently, so label histograms are not compared bin by bin).
-/// `index` is A's sample positions' [`PointIndex`], built once per shape by the caller (a
+/// `index` is A's sample positions' [`CellIndex`] ([`ColorSample::index`]), built once per shape by the caller (a
 /// shape is compared with several candidates; building it per pair was a fifth of the
 /// comparison's time); an index of other points gives a meaningless cost, not an error.
 pub fn color_cost_per_view(
-    (a, pa, index): (&ColorSample, &ViewPalette, &PointIndex),
+    (a, pa, index): (&ColorSample, &ViewPalette, &CellIndex),
     (b, pb): (&ColorSample, &ViewPalette),
     b_to_a: Option<&Transform>,
     cfg: &ColorConfig,
@@ -548,7 +627,7 @@ pub fn color_cost_per_view(
     let radius = cfg.overlap_radius * a.spacing;
     let (mut compared, mut differing) = (0usize, 0usize);
     for (p, &lb) in b.positions.iter().zip(&pb.labels) {
-        let Some((i, d)) = index.nearest(transform.apply(*p)) else {
+        let Some((i, d)) = index.nearest_within(transform.apply(*p), radius) else {
             continue;
         };
         if d > radius {
@@ -647,11 +726,11 @@ pub fn color_cost(
     let differ: Vec<bool> = (0..k * k)
         .map(|ij| palette.differ(ij / k, ij % k, cfg.color_tolerance))
         .collect();
-    let index = PointIndex::new(&a.positions);
+    let index = a.index();
     let radius = cfg.overlap_radius * a.spacing;
     let (mut compared, mut differing) = (0usize, 0usize);
     for (p, &lb) in b.positions.iter().zip(&palette.labels_b) {
-        let Some((i, d)) = index.nearest(transform.apply(*p)) else {
+        let Some((i, d)) = index.nearest_within(transform.apply(*p), radius) else {
             continue;
         };
         if d > radius {
@@ -763,7 +842,7 @@ mod tests {
     }
 
     #[test]
-    fn seeds_are_linfas() {
+    fn kmeans_is_linfas() {
         use rand::Rng;
         let mut gen = Xoshiro256Plus::seed_from_u64(5);
         for case in 0..60u64 {
@@ -776,10 +855,13 @@ mod tests {
             let cfg = ColorConfig {
                 seed: case,
                 clusters: 1 + case as usize % 12,
+                // Runs stopped by the iteration cap and by the tolerance, loose and tight.
+                max_iterations: [30, 1, 3, 100][case as usize % 4],
+                tolerance: [0.5, 1e-3, 5.0][case as usize % 3],
                 ..ColorConfig::default()
             };
             let ours = kmeans(rgb.iter(), n, &cfg).unwrap();
-            // linfa's own seeding on the same colours and generator.
+            // linfa's own k-means on the same colours and generator.
             let mut data = Array2::<f64>::zeros((n, 3));
             for (mut row, c) in data.rows_mut().into_iter().zip(&rgb) {
                 row.iter_mut().zip(c).for_each(|(v, &c)| *v = c as f64);

@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 use crate::features::color::{view_palette, ColorConfig, ColorSample, ViewPalette};
 use crate::features::shape_context::{ShapeContextConfig, ShapeDescriptor};
 use crate::features::sift::{RegionCrop, SiftConfig, SiftFeatures};
-use crate::features::transform::PointIndex;
+use crate::features::transform::CellIndex;
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
 use crate::geometry::{mask_geometry, ConvexShell, GeometryConfig, MaskCrop, Moments};
 
@@ -279,7 +279,7 @@ pub struct Appearance {
     palette: OnceLock<Option<ViewPalette>>,
     /// The colour sample's positions indexed, built on first read
     /// ([`Appearance::colour_index`]).
-    colour_index: OnceLock<Option<PointIndex>>,
+    colour_index: OnceLock<Option<CellIndex>>,
 }
 
 impl Appearance {
@@ -300,12 +300,12 @@ impl Appearance {
         }
     }
 
-    /// The colour sample's positions in a [`PointIndex`], built on the first read (the
-    /// per-view colour cost looks up the track's samples under each candidate's); `None`
-    /// without a colour sample.
-    pub fn colour_index(&self) -> Option<&PointIndex> {
+    /// The colour sample's positions indexed ([`ColorSample::index`]), built on the first
+    /// read (the per-view colour cost looks up the track's samples under each candidate's);
+    /// `None` without a colour sample.
+    pub fn colour_index(&self) -> Option<&CellIndex> {
         self.colour_index
-            .get_or_init(|| Some(PointIndex::new(&self.colour.as_ref()?.positions)))
+            .get_or_init(|| Some(self.colour.as_ref()?.index()))
             .as_ref()
     }
 
