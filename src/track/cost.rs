@@ -353,6 +353,56 @@ impl CostModel {
         (den > 0.0).then(|| num / den)
     }
 
+    /// One pair's combined cost ([`CostModel::combine`] of every term's cost) when it is at
+    /// most `max_cost` and, given `beat`, below it; `None` otherwise (gated, no data, or not
+    /// good enough). The cheap terms are computed first and each expensive one only while
+    /// the pair can still qualify: with the remaining terms at their best (0, or no data),
+    /// the cost could not fall below what is known. A search for the best of many pairs
+    /// (re-identification at confirmation compares a new track with every lost one) then
+    /// compares appearance only for the few that are near and plausible (issue 10).
+    pub fn cost_within(
+        &self,
+        track: &Track,
+        det: &Candidate<'_>,
+        max_cost: f64,
+        beat: Option<f64>,
+    ) -> Option<f64> {
+        // Far above rounding: the bound is summed in another order than `combine`.
+        const MARGIN: f64 = 1e-9;
+        let mut costs: Vec<Option<f64>> = vec![None; self.terms.len()];
+        let (mut num, mut den) = (0.0, 0.0);
+        let mut remaining: f64 = self.terms.iter().map(|w| w.weight).sum();
+        let order = (self.terms.iter().enumerate())
+            .filter(|(_, w)| !w.term.expensive())
+            .chain(
+                self.terms
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, w)| w.term.expensive()),
+            );
+        for (k, w) in order {
+            let c = w.term.cost(track, det).filter(|c| c.is_finite());
+            remaining -= w.weight;
+            if let Some(c) = c {
+                if w.gate.is_some_and(|g| c > g) {
+                    return None;
+                }
+                num += w.weight * c;
+                den += w.weight;
+            }
+            costs[k] = c;
+            let total = den + remaining.max(0.0);
+            if total > 0.0 {
+                let bound = num / total;
+                if bound > max_cost + MARGIN || beat.is_some_and(|b| bound >= b + MARGIN) {
+                    return None;
+                }
+            }
+        }
+        self.combine(&costs)
+            .filter(|&c| c <= max_cost && beat.is_none_or(|b| c < b))
+    }
+
     /// The combined cost of every candidate pair of `regions` (`None` = not allowed), in the
     /// order of `regions.pairs` ([`CostModel::score_pairs`]'s `cost`).
     pub fn score(
@@ -791,5 +841,82 @@ mod tests {
         assert!(far.absolute > 0.4, "{far:?}");
         assert_eq!(strict[0], all[0]);
         assert_eq!(strict[2], all[2]);
+    }
+
+    /// A term with a fixed cost, cheap or expensive, counting its calls.
+    struct FixedCounted(
+        Option<f64>,
+        bool,
+        std::sync::Arc<std::sync::atomic::AtomicUsize>,
+    );
+    impl PairCost for FixedCounted {
+        fn name(&self) -> &str {
+            "fixed"
+        }
+        fn cost(&self, _: &Track, _: &Candidate<'_>) -> Option<f64> {
+            self.2.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.0
+        }
+        fn expensive(&self) -> bool {
+            self.1
+        }
+    }
+
+    /// `cost_within` answers what full evaluation filtered by the limits answers, for
+    /// random term values (some missing), weights, gates and limits, and skips expensive
+    /// terms in some of them.
+    #[test]
+    fn cost_within_is_the_filtered_full_cost() {
+        use crate::motion::BoxKalman;
+        use crate::track::Config;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let b = BBox::new(0.0, 0.0, 40.0, 80.0);
+        let motion = Box::new(BoxKalman::new(&b, Config::default().motion_params()).unwrap());
+        let det = Detection::from_box(b, 1.0);
+        let track = Track::born(&det, &Features::default(), motion, None, 1, false, false);
+        let cand = Candidate {
+            index: 0,
+            detection: &det,
+            features: None,
+        };
+        let mut s = 4242u64;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let calls = std::sync::Arc::new(AtomicUsize::new(0));
+        let (mut skipped, mut found) = (0, 0);
+        for case in 0..2000 {
+            let mut m = CostModel::default();
+            // Expensive terms first in the list: `cost_within` still takes the cheap first.
+            for k in 0..4 {
+                let value = (next() > 0.15).then(&mut next);
+                let gate = (next() > 0.7).then(|| 0.3 + 0.7 * next());
+                let expensive = k < 2;
+                m.push(
+                    Box::new(FixedCounted(value, expensive, calls.clone())),
+                    0.25 + next(),
+                    gate,
+                );
+            }
+            let max_cost = next();
+            let beat = (next() > 0.5).then(&mut next);
+            let full: Vec<Option<f64>> = m
+                .terms()
+                .iter()
+                .map(|w| w.term.cost(&track, &cand).filter(|c| c.is_finite()))
+                .collect();
+            let want = m
+                .combine(&full)
+                .filter(|&c| c <= max_cost && beat.is_none_or(|b| c < b));
+            calls.store(0, Ordering::Relaxed);
+            let got = m.cost_within(&track, &cand, max_cost, beat);
+            assert_eq!(got, want, "case {case}");
+            skipped += usize::from(calls.load(Ordering::Relaxed) < 4);
+            found += usize::from(got.is_some());
+        }
+        assert!(skipped > 200 && found > 100, "{skipped} {found}");
     }
 }

@@ -639,16 +639,11 @@ impl Tracker {
             {
                 continue;
             }
-            let costs: Vec<Option<f64>> = self
+            let max = self.config.reid_max_cost;
+            if let Some(c) = self
                 .reid_costs
-                .terms()
-                .iter()
-                .map(|w| w.term.cost(t, &cand))
-                .collect();
-            let Some(c) = self.reid_costs.combine(&costs) else {
-                continue;
-            };
-            if c <= self.config.reid_max_cost && best.is_none_or(|(_, b)| c < b) {
+                .cost_within(t, &cand, max, best.map(|b| b.1))
+            {
                 best = Some((i, c));
             }
         }
