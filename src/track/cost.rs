@@ -484,8 +484,17 @@ impl CostModel {
             let (Some(t), Some(d)) = (tracks.get(ti), dets.get(di)) else {
                 continue;
             };
+            // Once a gate rejects the pair it is never matched: its remaining terms are not
+            // computed, except the cluster-normalised ones, whose values set the cluster's
+            // scale for the other pairs (re-identification: a colour that fails its gate
+            // spares the SIFT match).
+            let over_gate = |raw: &[Option<f64>], k: usize| {
+                let w = &self.terms[k];
+                matches!((w.gate, raw[p * nt + k]), (Some(g), Some(c)) if c > g)
+            };
+            let mut rejected = (0..nt).any(|k| over_gate(&raw, k));
             for (k, w) in self.terms.iter().enumerate() {
-                if !w.term.expensive() {
+                if !w.term.expensive() || (rejected && !w.term.normalise_in_cluster()) {
                     continue;
                 }
                 raw[p * nt + k] = if ranked[p] || !w.term.normalise_in_cluster() {
@@ -497,6 +506,7 @@ impl CostModel {
                     // look larger and lost 0.6 HOTA on a ragged crowd.
                     Some(1.0)
                 };
+                rejected |= over_gate(&raw, k);
             }
         }
         let gated: Vec<bool> = raw
@@ -918,5 +928,62 @@ mod tests {
             found += usize::from(got.is_some());
         }
         assert!(skipped > 200 && found > 100, "{skipped} {found}");
+    }
+
+    /// A pair that an expensive term's gate rejects does not compute the expensive terms
+    /// after it (unless cluster-normalised), and scores as full evaluation does.
+    #[test]
+    fn a_gated_pair_skips_its_remaining_appearance() {
+        use crate::motion::BoxKalman;
+        use crate::track::regions::Cluster;
+        use crate::track::Config;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let b = BBox::new(0.0, 0.0, 40.0, 80.0);
+        let motion = Box::new(BoxKalman::new(&b, Config::default().motion_params()).unwrap());
+        let det = Detection::from_box(b, 1.0);
+        let tracks = [Track::born(
+            &det,
+            &Features::default(),
+            motion,
+            None,
+            1,
+            false,
+            false,
+        )];
+        let cands = [Candidate {
+            index: 0,
+            detection: &det,
+            features: None,
+        }];
+        let regions = Regions {
+            pairs: vec![(0, 0)],
+            pair_cluster: vec![0],
+            clusters: vec![Cluster {
+                tracks: vec![0],
+                dets: vec![0],
+            }],
+        };
+        let (first, second) = (
+            std::sync::Arc::new(AtomicUsize::new(0)),
+            std::sync::Arc::new(AtomicUsize::new(0)),
+        );
+        for (value, gate, later_calls) in [(0.6, 0.5, 0), (0.4, 0.5, 1)] {
+            let mut m = CostModel::default();
+            m.push(Box::new(IouCost { buffer: 1.0 }), 1.0, None);
+            m.push(
+                Box::new(FixedCounted(Some(value), true, first.clone())),
+                1.0,
+                Some(gate),
+            );
+            m.push(
+                Box::new(FixedCounted(Some(0.1), true, second.clone())),
+                1.0,
+                None,
+            );
+            second.store(0, Ordering::Relaxed);
+            let s = m.score_pairs(&tracks, &cands, &regions);
+            assert_eq!(second.load(Ordering::Relaxed), later_calls, "value {value}");
+            assert_eq!(s[0].is_none(), value > gate);
+        }
     }
 }
