@@ -11,7 +11,7 @@ use spade::{DelaunayTriangulation, Point2, Triangulation};
 
 use super::gjk::PreparedShell;
 use super::GeometryError;
-use crate::frame::{BBox, Point};
+use crate::frame::{BBox, Mask, Point};
 
 /// Distance under which two shells count as touching, in pixels.
 ///
@@ -346,6 +346,12 @@ pub(crate) fn point_segment_distance(p: Point, a: Point, b: Point) -> f64 {
 pub(crate) fn convex_hull(mut pts: Vec<Point>) -> Vec<Point> {
     pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     pts.dedup();
+    monotone_chain(pts)
+}
+
+/// The convex hull of points already sorted by `(x, y)` without repeats (Andrew's monotone
+/// chain, as [`convex_hull`] returns it).
+fn monotone_chain(pts: Vec<Point>) -> Vec<Point> {
     if pts.len() <= 2 {
         return pts;
     }
@@ -376,6 +382,61 @@ pub(crate) fn convex_hull(mut pts: Vec<Point>) -> Vec<Point> {
         hull.truncate(1);
     }
     hull
+}
+
+/// The convex hull of a mask's pixel squares ([`ConvexShell::from_points`] of every pixel's
+/// corners, vertex for vertex) in time linear in its rows: only each row's leftmost and
+/// rightmost corners can be vertices, and they come sorted by `y`, so the monotone chain
+/// runs on the transposed points without a sort. Every detection's shell is this hull; the
+/// sort was most of its cost (issue 10).
+pub fn pixel_hull(mask: &Mask) -> ConvexShell {
+    let w = mask.width() as usize;
+    if w == 0 {
+        return ConvexShell::empty();
+    }
+    let (x0, y0) = (f64::from(mask.x()), f64::from(mask.y()));
+    // Per corner height y: the leftmost and rightmost corner x, as transposed points (y, x).
+    let mut levels: Vec<(f64, f64, f64)> = Vec::new();
+    let mut level = |y: f64, l: f64, r: f64| match levels.last_mut() {
+        Some(last) if last.0 == y => {
+            last.1 = last.1.min(l);
+            last.2 = last.2.max(r);
+        }
+        _ => levels.push((y, l, r)),
+    };
+    for (ly, row) in mask.data().chunks_exact(w).enumerate() {
+        let (Some(a), Some(b)) = (
+            row.iter().position(|&v| v != 0),
+            row.iter().rposition(|&v| v != 0),
+        ) else {
+            continue;
+        };
+        let y = y0 + ly as f64;
+        let (l, r) = (x0 + a as f64, x0 + b as f64 + 1.0);
+        level(y, l, r);
+        level(y + 1.0, l, r);
+    }
+    // Transposed, sorted by (y, x); a row's corners differ in x by at least 1: no repeats.
+    let transposed: Vec<Point> = levels
+        .iter()
+        .flat_map(|&(y, l, r)| [Point::new(y, l), Point::new(y, r)])
+        .collect();
+    // Transposing mirrors the plane: the chain comes back clockwise; reverse it, and start
+    // at the smallest (x, y) as `convex_hull` does.
+    let mut hull: Vec<Point> = monotone_chain(transposed)
+        .into_iter()
+        .rev()
+        .map(|p| Point::new(p.y, p.x))
+        .collect();
+    if let Some(first) = hull
+        .iter()
+        .enumerate()
+        .min_by(|(_, a), (_, b)| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)))
+        .map(|(i, _)| i)
+    {
+        hull.rotate_left(first);
+    }
+    ConvexShell { vertices: hull }
 }
 
 /// A triangle mesh for drawing: the Delaunay triangulation behind a shell.
@@ -449,6 +510,38 @@ impl Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The row-by-row pixel hull is the hull of every pixel's corners, vertex for vertex, on
+    /// random blobs with holes, gaps between rows, single pixels, lines and offsets.
+    #[test]
+    fn pixel_hull_is_the_hull_of_every_pixel_corner() {
+        let mut s = 31u64;
+        let mut next = |n: u64| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % n
+        };
+        for case in 0..300 {
+            let (w, h) = (1 + next(14) as u32, 1 + next(14) as u32);
+            let density = 1 + next(4);
+            let bits: Vec<u8> = (0..w * h).map(|_| u8::from(next(4) < density)).collect();
+            let (x, y) = (next(50) as i32 - 25, next(50) as i32 - 25);
+            let mask = Mask::new(x, y, w, h, bits).unwrap();
+            let corners: Vec<Point> = (0..h as i32)
+                .flat_map(|ly| (0..w as i32).map(move |lx| (lx, ly)))
+                .filter(|&(lx, ly)| mask.get(x + lx, y + ly))
+                .flat_map(|(lx, ly)| {
+                    let (px, py) = (f64::from(x + lx), f64::from(y + ly));
+                    [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                        .map(|(dx, dy)| Point::new(px + dx, py + dy))
+                })
+                .collect();
+            let want = ConvexShell::from_points(&corners).unwrap();
+            assert_eq!(pixel_hull(&mask), want, "case {case}: {mask:?}");
+        }
+        assert_eq!(pixel_hull(&Mask::empty()), ConvexShell::empty());
+    }
 
     fn sq() -> ConvexShell {
         ConvexShell::from_points(&[

@@ -467,33 +467,10 @@ pub fn contour_descriptor(mask: &Mask, cfg: &ShapeContextConfig) -> Option<Shape
     ShapeDescriptor::from_contour(&contour, cfg).ok()
 }
 
-/// The convex hull of the mask's pixel squares: each row contributes the outer corners of its
-/// first and last foreground pixel. Empty for an empty mask.
+/// The convex hull of the mask's pixel squares ([`crate::geometry::shell::pixel_hull`]). Empty for an empty
+/// mask.
 pub fn pixel_hull(mask: &Mask) -> ConvexShell {
-    let w = mask.width() as usize;
-    if w == 0 {
-        return ConvexShell::empty();
-    }
-    let (x0, y0) = (mask.x() as f64, mask.y() as f64);
-    let mut pts = Vec::new();
-    for (ly, row) in mask.data().chunks_exact(w).enumerate() {
-        let (Some(a), Some(b)) = (
-            row.iter().position(|&v| v != 0),
-            row.iter().rposition(|&v| v != 0),
-        ) else {
-            continue;
-        };
-        let y = y0 + ly as f64;
-        let (l, r) = (x0 + a as f64, x0 + b as f64 + 1.0);
-        pts.extend([
-            Point::new(l, y),
-            Point::new(l, y + 1.0),
-            Point::new(r, y),
-            Point::new(r, y + 1.0),
-        ]);
-    }
-    // Mask coordinates are i32 and sizes u32: every point is finite.
-    ConvexShell::from_points(&pts).unwrap_or_default()
+    crate::geometry::shell::pixel_hull(mask)
 }
 
 /// The thesis' Canny shell on the mask reduced to at most `max_side` pixels (module docs).
