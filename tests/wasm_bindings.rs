@@ -552,6 +552,14 @@ fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
         }
     }
     assert_eq!(tracker.frame(), 40);
+    // The phases were timed with the host's clock, every frame.
+    let p: serde_json::Value =
+        serde_wasm_bindgen::from_value(JsValue::from(tracker.phase_times().unwrap())).unwrap();
+    assert_eq!(p["frames"], 40, "{p}");
+    for phase in ["features", "regions", "costs", "assignment", "update"] {
+        let ms = p[phase].as_f64().unwrap();
+        assert!(ms.is_finite() && ms >= 0.0, "{phase}: {p}");
+    }
     assert!(seen.len() >= 5, "most objects tracked: {seen:?}");
     let stable = seen.values().filter(|ids| ids.len() == 1).count();
     assert!(stable * 10 >= seen.len() * 8, "ids per object: {seen:?}");

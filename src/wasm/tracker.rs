@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::frame::{TrackState, TrackedShape};
-use crate::io::{Record, Rle};
+use crate::io::Record;
 use crate::track::offline::{
     OfflineConfig, OfflineError, OfflineTracker, Progress, RleHistory, RleShape,
 };
@@ -41,20 +41,47 @@ pub struct ShapeJs {
 }
 
 impl ShapeJs {
-    fn new(s: &TrackedShape, rle: Option<&Rle>) -> Self {
+    fn new(s: &TrackedShape, mask: Option<RleJs>) -> Self {
         ShapeJs {
             frame: s.frame,
             id: s.id as i64,
             bbox: s.bbox.into(),
             score: s.score,
             class: s.class,
-            mask: rle.map(RleJs::from),
+            mask,
             interpolated: s.interpolated,
             state: s.state,
             centroid: s.centroid.into(),
             cost: s.cost,
         }
     }
+}
+
+/// Where the tracker's time went since it was built, in milliseconds summed over the
+/// frames (the core's `PhaseTimes`): the phases partition `update`'s time inside wasm, so
+/// `update`'s time measured in JS minus their sum is the crossing into wasm and the shapes'
+/// way back to JS.
+#[derive(Debug, Clone, PartialEq, Serialize, Tsify)]
+pub struct PhaseTimesJs {
+    /// Frames timed.
+    pub frames: u64,
+    /// Per-detection features and every appearance description.
+    pub features: f64,
+    /// Motion prediction and region estimation.
+    pub regions: f64,
+    /// Pair costs of every association stage.
+    pub costs: f64,
+    /// The assignment stages.
+    pub assignment: f64,
+    /// Track updates: fragments, filters, lifecycle, coasting, spawning.
+    pub update: f64,
+}
+
+#[wasm_bindgen]
+extern "C" {
+    /// The host's monotonic clock in milliseconds (browsers, workers and Node all have it).
+    #[wasm_bindgen(js_namespace = performance, js_name = now)]
+    fn performance_now() -> f64;
 }
 
 /// The shapes one update reports.
@@ -130,7 +157,11 @@ impl Tracker {
             c.appearance.enabled = false;
             c
         });
-        let tracker = CoreTracker::new(cfg).map_err(js_error)?;
+        // The phases are timed with the host's clock (the core never reads time itself); a
+        // few calls per frame, so it is always on and `phaseTimes()` can report them.
+        let tracker = CoreTracker::new(cfg)
+            .map_err(js_error)?
+            .with_clock(|| performance_now() / 1000.0);
         let inner = OfflineTracker::with_history(tracker, config, fps)
             .map_err(js_error)?
             .with_sequence_image_size(size);
@@ -146,6 +177,21 @@ impl Tracker {
     #[wasm_bindgen(getter)]
     pub fn frame(&self) -> u32 {
         self.inner.frames()
+    }
+
+    /// Where `update`'s time went since the tracker was built, per phase (milliseconds summed
+    /// over the frames): for bench pages and `shapetrack bench --wasm`.
+    #[wasm_bindgen(js_name = phaseTimes)]
+    pub fn phase_times(&self) -> Result<Ts<PhaseTimesJs>, JsValue> {
+        let t = self.inner.phase_times();
+        ts(&PhaseTimesJs {
+            frames: t.frames,
+            features: t.features * 1000.0,
+            regions: t.regions * 1000.0,
+            costs: t.costs * 1000.0,
+            assignment: t.assignment * 1000.0,
+            update: t.update * 1000.0,
+        })
     }
 
     /// Whether this tracker can run the offline pass (it was built with offline options).
@@ -310,7 +356,7 @@ fn online_error(e: OfflineError) -> JsValue {
 fn shapes_js(shapes: &[RleShape]) -> Result<Ts<Shapes>, JsValue> {
     let out: Vec<ShapeJs> = shapes
         .iter()
-        .map(|k| ShapeJs::new(&k.shape, k.rle().as_ref()))
+        .map(|k| ShapeJs::new(&k.shape, k.packed.as_ref().map(RleJs::from)))
         .collect();
     ts(&Shapes(out))
 }

@@ -258,6 +258,9 @@ fn wasm_vs_native(scene: WasmScene) -> Result<String, Box<dyn std::error::Error>
     let frames: Vec<SynthFrame> = Scene::new(scene.config())?.collect();
     let t = measure(&frames, Mode::Mask)?;
     let core = 1e3 * t.total() / t.frames.max(1) as f64;
+    // Twice, timing the second, as the wasm side does (there, V8's compiler warms up during
+    // the first pass; here only the allocator and caches do).
+    binding_path_ms(&frames)?;
     let native = binding_path_ms(&frames)?;
     let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/bench-wasm.mjs");
     let out = std::process::Command::new("node")
@@ -277,8 +280,40 @@ fn wasm_vs_native(scene: WasmScene) -> Result<String, Box<dyn std::error::Error>
     let wasm = v["ms_per_frame"]
         .as_f64()
         .ok_or("bench-wasm.mjs printed no ms_per_frame")?;
+    let first = v["first_pass_ms_per_frame"]
+        .as_f64()
+        .map_or(String::new(), |f| {
+            format!(
+                " (its first pass, while V8 compiles: {f:.2}, ×{:.2})",
+                f / native.max(1e-9)
+            )
+        });
+    // Phase by phase (ms/frame, native → wasm): where wasm's extra time goes, and how much
+    // of it is outside the tracker (the crossing into wasm and the shapes back to JS).
+    let n = t.frames.max(1) as f64;
+    let native_phases =
+        [t.features, t.regions, t.costs, t.assignment, t.update].map(|s| 1e3 * s / n);
+    let names = ["features", "regions", "costs", "assignment", "update"];
+    let mut phases = Vec::new();
+    let mut wasm_core = 0.0;
+    for (name, nat) in names.iter().zip(native_phases) {
+        if let Some(w) = v["phases"][name].as_f64() {
+            wasm_core += w;
+            phases.push(format!("{name} {nat:.3} → {w:.3}"));
+        }
+    }
+    let phases = if phases.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "\n  phases ms/frame native → wasm: {}; outside the tracker: native {:.3}, wasm {:.3}",
+            phases.join(", "),
+            native - core,
+            wasm - wasm_core
+        )
+    };
     Ok(format!(
-        "wasm vs native, scene {} ({}x{}, {} frames, masks): native {native:.2} ms/frame (the bindings' path; the tracker's phases alone {core:.2}), wasm (Node) {wasm:.2} ms/frame: ×{:.2}",
+        "wasm vs native, scene {} ({}x{}, {} frames, masks): native {native:.2} ms/frame (the bindings' path; the tracker's phases alone {core:.2}), wasm (Node) {wasm:.2} ms/frame: ×{:.2}{first}{phases}",
         scene.name(),
         frames.first().map_or(0, |f| f.width),
         frames.first().map_or(0, |f| f.height),

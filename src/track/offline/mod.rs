@@ -521,6 +521,12 @@ impl<H: History> OfflineTracker<H> {
         self.tracker.frame()
     }
 
+    /// The online tracker's time per phase ([`Tracker::phase_times`]; zero unless it was
+    /// built [`Tracker::with_clock`]).
+    pub fn phase_times(&self) -> crate::track::PhaseTimes {
+        self.tracker.phase_times()
+    }
+
     /// The online output so far.
     pub fn online_shapes(&self) -> &[H::Item] {
         self.shapes.items()
