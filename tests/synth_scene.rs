@@ -101,6 +101,18 @@ fn output_is_pinned() {
     assert_eq!(digest(&f), 12_139_937_522_718_093_333);
 }
 
+/// The same for the app's demo scene, the one with illumination drift and sensor noise
+/// (1280×720: the two are most of its frame time).
+#[test]
+fn demo_output_is_pinned() {
+    let cfg = shapetrack::synth::ScenePreset::Demo.config(0);
+    assert!(cfg.appearance.illumination_drift > 0.0 && cfg.appearance.sensor_noise > 0);
+    let f: Vec<SynthFrame> = Scene::new(cfg).unwrap().take(3).collect();
+    assert_eq!(digest(&f), PINNED_DEMO);
+}
+
+const PINNED_DEMO: u64 = 12_854_346_901_310_440_744;
+
 /// The same for the scenario families: deformation, the camera, look-alike palettes and
 /// streams use only exact arithmetic and the scene's own trigonometry.
 #[test]

@@ -505,6 +505,16 @@ fn synthetic_frames_are_the_same_in_order_and_out_of_order() {
     }
     let msg = error_message(b.render(0.0, &mut buf_b).err().unwrap());
     assert!(msg.contains("outside 1..=300"), "{msg}");
+    // The buffer holds the core's RGB frames, pixel by pixel, opaque.
+    let core = shapetrack::synth::Scene::new(shapetrack::synth::ScenePreset::Default.config(0));
+    for (f, px) in core.unwrap().zip(&frames) {
+        let want: Vec<u8> = f
+            .image
+            .chunks_exact(3)
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect();
+        assert!(*px == want, "frame {} differs from the core's", f.index);
+    }
 }
 
 /// The frame buffer's bytes, read through wasm memory as JS would.
