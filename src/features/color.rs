@@ -33,10 +33,12 @@
 //! which they do for whole views of one shape, and not always for a sliver against a whole
 //! view (see the tracker's use).
 //!
-//! k-means cost: linfa runs `n_runs` k-means++ restarts (its default is 10, ours 1) of up to
+//! k-means cost: `n_runs` k-means++ restarts (linfa's default is 10, ours 1) of up to
 //! `max_iterations` Lloyd steps over `|A| + |B|` points; with 1500 + 1500 samples and `K = 10`
-//! this is a few milliseconds per pair (see `benches/descriptors.rs`). linfa parallelises the
-//! assignment step with rayon natively; on wasm32 rayon runs it on the calling thread.
+//! this is a few milliseconds per pair (see `benches/descriptors.rs`). One run is computed
+//! here, step for step as linfa computes it (`plus_plus_seeds`, `lloyd`: the same centroids
+//! and labels, without linfa's per-step rayon and `ndarray` overheads); several runs go
+//! through linfa itself.
 
 use super::transform::{CellIndex, Transform, Translation};
 use crate::frame::{Frame, Mask, Point};
@@ -467,8 +469,8 @@ fn plus_plus_seeds(
     Ok(seeds)
 }
 
-/// The nearest centroid to `p` and its squared distance, as linfa's `closest_centroid` picks
-/// it: the first of equally near ones.
+/// The index of the centroid nearest to `p`, as linfa's `closest_centroid` picks it: the
+/// first of equally near ones.
 fn closest(centroids: &[[f64; 3]], p: &[f64; 3]) -> usize {
     let mut best = (0, f64::INFINITY);
     for (i, c) in centroids.iter().enumerate() {
