@@ -425,15 +425,14 @@ impl<'a> Frame<'a> {
     pub fn gray_crop(&self, rect: &BBox) -> Option<((u32, u32, u32, u32), image::GrayImage)> {
         let (x0, y0, w, h) = self.clip(rect)?;
         let c = self.format.channels();
+        let (a, len) = (x0 as usize * c, w as usize * c);
         let mut buf = Vec::with_capacity(w as usize * h as usize);
         for y in y0..y0 + h {
-            let row = &self.data[y as usize * self.stride..];
-            for x in x0..x0 + w {
-                let i = x as usize * c;
-                let v =
-                    0.299 * row[i] as f32 + 0.587 * row[i + 1] as f32 + 0.114 * row[i + 2] as f32;
-                buf.push(v.round().clamp(0.0, 255.0) as u8);
-            }
+            let start = y as usize * self.stride + a;
+            let row = self.data.get(start..start + len)?;
+            buf.extend(row.chunks_exact(c).map(|p| {
+                round_u8(0.299 * p[0] as f32 + 0.587 * p[1] as f32 + 0.114 * p[2] as f32)
+            }));
         }
         image::GrayImage::from_raw(w, h, buf).map(|img| ((x0, y0, w, h), img))
     }
@@ -910,6 +909,16 @@ pub enum TrackState {
     Removed,
 }
 
+/// `v.round().clamp(0.0, 255.0) as u8` for `v ≥ 0`, bit for bit, without `f32::round`: in
+/// wasm that is a call into libm per pixel (wasm's own rounding instruction rounds half to
+/// even), and it was most of a grey crop's time. Truncation and the exact fractional part
+/// (`v − trunc(v)` is exact below 2²³) round half away from zero as `round` does.
+#[inline(always)]
+pub(crate) fn round_u8(v: f32) -> u8 {
+    let t = v as u32;
+    (t + u32::from(v - t as f32 >= 0.5)).min(255) as u8
+}
+
 /// One track's shape in one frame, as the tracker reports it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrackedShape {
@@ -940,6 +949,34 @@ pub struct TrackedShape {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `round_u8` is `f32::round` then the clamp, on every luma a pixel can have, on the
+    /// values next to every half (where `floor(v + 0.5)` would differ), and past 255.
+    #[test]
+    fn round_u8_is_round() {
+        let want = |v: f32| v.round().clamp(0.0, 255.0) as u8;
+        for r in (0..=255u32).step_by(5) {
+            for g in 0..=255u32 {
+                for b in (0..=255u32).step_by(3) {
+                    let v = 0.299 * r as f32 + 0.587 * g as f32 + 0.114 * b as f32;
+                    assert_eq!(round_u8(v), want(v), "{v}");
+                }
+            }
+        }
+        for k in 0..=256u32 {
+            let half = k as f32 + 0.5;
+            for v in [
+                half,
+                f32::from_bits(half.to_bits() - 1),
+                f32::from_bits(half.to_bits() + 1),
+                k as f32,
+            ] {
+                assert_eq!(round_u8(v), want(v), "{v}");
+            }
+        }
+        assert_eq!(round_u8(0.49999997), 0);
+        assert_eq!(round_u8(300.0), 255);
+    }
 
     #[test]
     fn frame_checks_sizes() {

@@ -502,6 +502,7 @@ impl<H: History> OfflineTracker<H> {
             for s in out.iter().filter(|s| s.frame == now) {
                 self.snapshots.record(f, s, self.config.appearance.max_side);
             }
+            self.snapshots.end_frame();
         }
         let start = self.shapes.items().len();
         for s in out {
