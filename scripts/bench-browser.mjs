@@ -25,7 +25,15 @@
 // skipped with a note. Not run by default: decoding the sequence and a hundred frames of the
 // moving-camera detector take a minute on this machine, on top of the demo's.
 //
+// With `--page SIZES` (comma-separated WxH, e.g. `1280x720,1920x1080`) it runs the app's bench
+// page (www/bench.html: the demo scene rendered at each size, the `--detector` given or the
+// background subtractor, the frame painted by the worker and the boxes drawn by the page, the
+// tracker offline-capable as the app opens the demo unless `--online-only`) and prints its row
+// per size (fps and median per-frame times), appended to target/e2e/fps.txt.
+//
 //   npm run build && node scripts/bench-browser.mjs [--frames N] [--min FPS] [--port P]
+//   npm run build && node scripts/bench-browser.mjs --page 1280x720,1920x1080 [--detector NAME] \
+//     [--online-only] [--frames N] [--min FPS] [--port P]
 //   npm run build && node scripts/bench-browser.mjs --detectors moving,moving-coarse,background \
 //     [--size 854x480] [--frames N] [--sequence bus] [--min FPS] [--port P]
 //
@@ -47,6 +55,7 @@ const text = (/** @type {string} */ name) => {
   return i >= 0 ? process.argv[i + 1] : undefined;
 };
 const DETECTORS = text('--detectors')?.split(',').filter(Boolean) ?? null;
+const PAGE = text('--page')?.split(',').filter(Boolean) ?? null;
 const FRAMES = arg('--frames', DETECTORS ? 100 : 300);
 const MIN = arg('--min', 0);
 // Unusual, and not the e2e suite's ports: the two may run side by side. `--port` for a second
@@ -66,10 +75,45 @@ const server = await serve(DIST, PORT);
 const browser = await launch();
 try {
   if (DETECTORS) await benchDetectors(DETECTORS);
+  else if (PAGE) await benchPage(PAGE);
   else await benchDemo();
 } finally {
   await browser.close();
   await server.close();
+}
+
+/**
+ * The bench page at each size: one run each, in a fresh page.
+ * @param {string[]} sizes
+ */
+async function benchPage(sizes) {
+  const detector = text('--detector') ?? 'background';
+  mkdirSync(OUT, { recursive: true });
+  for (const size of sizes) {
+    const page = await browser.context.newPage();
+    const errors = watchErrors(page);
+    const offline = process.argv.includes('--online-only') ? '&offline=0' : '';
+    await page.goto(`${server.url}bench.html?size=${size}&detector=${detector}&frames=${FRAMES}${offline}&run=1`);
+    /** @type {any} */
+    let b;
+    for (;;) {
+      b = await page.evaluate(() => /** @type {any} */ (window).__bench);
+      if (b && (b.results.length || b.error)) break;
+      await new Promise((r) => setTimeout(r, 200));
+    }
+    if (b.error || errors.length) throw new Error(`bench page, ${size}: ${b.error ?? errors.join('; ')}`);
+    const r = b.results[0];
+    const line =
+      `bench page ${r.size}, ${r.detector}${r.offline ? ', offline-capable' : ', online only'}: ${r.fps.toFixed(1)} fps over ${r.frames} frames ` +
+      `(median ms/frame: detect ${r.detect.toFixed(1)}, track ${r.track.toFixed(1)}, worker ${r.worker.toFixed(1)}, page ${r.page.toFixed(2)})`;
+    console.log(line);
+    appendFileSync(join(OUT, 'fps.txt'), `${line}\n`);
+    if (MIN > 0 && r.fps < MIN) {
+      console.error(`${size}: ${r.fps.toFixed(1)} fps < ${MIN}`);
+      process.exitCode = 1;
+    }
+    await page.close();
+  }
 }
 
 async function benchDemo() {

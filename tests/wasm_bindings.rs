@@ -517,6 +517,35 @@ fn synthetic_frames_are_the_same_in_order_and_out_of_order() {
     }
 }
 
+#[wasm_bindgen_test]
+fn a_scene_at_another_size_renders_at_that_size_and_bad_sizes_are_errors() {
+    let mut s = SynthScene::sized(ts(JsValue::from_str("demo")), 640.0, 360.0).unwrap();
+    assert_eq!((s.width(), s.height(), s.frames()), (640, 360, 600));
+    let mut buf = FrameBuffer::new(640.0, 360.0).unwrap();
+    let f = s.render(1.0, &mut buf).unwrap();
+    // The core's demo at that size, frame for frame.
+    let cfg = shapetrack::synth::SynthConfig::demo().scaled_to(640, 360);
+    let core = shapetrack::synth::Scene::new(cfg).unwrap().next().unwrap();
+    assert_eq!(records_of(f.ground_truth().unwrap()).len(), core.gt.len());
+    let rgb: Vec<u8> = pixels(&buf)
+        .chunks_exact(4)
+        .flat_map(|c| [c[0], c[1], c[2]])
+        .collect();
+    assert!(rgb == core.image);
+    for (w, h, what) in [
+        (8.0, 360.0, "size"),
+        (640.5, 360.0, "width"),
+        (640.0, -1.0, "height"),
+    ] {
+        let msg = error_message(
+            SynthScene::sized(ts(JsValue::from_str("demo")), w, h)
+                .err()
+                .unwrap(),
+        );
+        assert!(msg.contains(what), "{w}x{h}: {msg}");
+    }
+}
+
 /// The frame buffer's bytes, read through wasm memory as JS would.
 fn pixels(buf: &FrameBuffer) -> Vec<u8> {
     let mem: js_sys::WebAssembly::Memory = wasm_bindgen::memory().dyn_into().unwrap();

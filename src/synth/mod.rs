@@ -585,6 +585,34 @@ impl SynthConfig {
         }
     }
 
+    /// The same scene at another frame size, for speed measurements at a chosen resolution
+    /// (the app's bench page): shape radii, speeds and bar widths are scaled by
+    /// √(new area / old area), fixed occluder rectangles by the width and height ratios, so
+    /// the scene keeps its look, its object count and its occlusions and only the pixel count
+    /// changes. Scripted trajectories and the camera path are left in their pixels (the
+    /// presets have none). The size is checked when the scene is built ([`Scene::new`]).
+    pub fn scaled_to(mut self, width: u32, height: u32) -> Self {
+        let (sx, sy) = (
+            width as f64 / self.width.max(1) as f64,
+            height as f64 / self.height.max(1) as f64,
+        );
+        let s = (sx * sy).sqrt();
+        let m = &mut self.motion;
+        m.radius = (m.radius.0 * s, m.radius.1 * s);
+        m.speed = (m.speed.0 * s, m.speed.1 * s);
+        let o = &mut self.occlusion;
+        o.bar_width = o.bar_width.map(|w| ((w as f64 * s).round() as u32).max(1));
+        for r in &mut o.rects {
+            r.x = (r.x as f64 * sx).round() as u32;
+            r.y = (r.y as f64 * sy).round() as u32;
+            r.w = ((r.w as f64 * sx).round() as u32).max(1);
+            r.h = ((r.h as f64 * sy).round() as u32).max(1);
+        }
+        self.width = width;
+        self.height = height;
+        self
+    }
+
     /// A scene of the scenario family `family` (see [`Family`]): 640×480, 25 fps, 300 frames,
     /// the default detection noise.
     pub fn family(family: Family, seed: u64) -> Self {
@@ -1881,5 +1909,60 @@ mod tests {
         assert!(max_id > 10, "some objects left and were replaced");
         assert!(alive.iter().all(|&n| n <= 10));
         assert!(alive.iter().filter(|&&n| n >= 7).count() > 200);
+    }
+
+    /// The demo at 1920×1080 is the demo 1.5× larger: the frames have the new size, the shapes
+    /// are about 1.5× wider, as many are in view, and a size the scene refuses stays refused.
+    #[test]
+    fn scaled_scene_keeps_its_look() {
+        // Mean √(full area) of the objects in view, and mean count in view, over 60 frames.
+        let stats = |c: SynthConfig| {
+            let (mut size, mut n, mut frames) = (0.0, 0.0, 0.0);
+            for f in Scene::new(c).unwrap().take(60) {
+                assert!(f.image.len() == 3 * (f.width * f.height) as usize);
+                for g in &f.gt {
+                    size += (g.full_area as f64).sqrt();
+                    n += 1.0;
+                }
+                frames += 1.0;
+            }
+            (size / n, n / frames)
+        };
+        let (size, count) = stats(SynthConfig::demo());
+        let big = SynthConfig::demo().scaled_to(1920, 1080);
+        assert_eq!((big.width, big.height), (1920, 1080));
+        let (big_size, big_count) = stats(big);
+        let ratio = big_size / size;
+        assert!((1.35..1.65).contains(&ratio), "size ratio {ratio}");
+        assert!(
+            (big_count - count).abs() <= 0.25 * count,
+            "{count} vs {big_count}"
+        );
+        // The same scene at its own size is unchanged.
+        assert_eq!(
+            SynthConfig::demo().scaled_to(1280, 720),
+            SynthConfig::demo()
+        );
+        let mut c = SynthConfig::default();
+        c.occlusion.rects.push(OccluderRect {
+            x: 320,
+            y: 240,
+            w: 64,
+            h: 48,
+        });
+        let c = c.scaled_to(1280, 960);
+        assert_eq!(
+            c.occlusion.rects[0],
+            OccluderRect {
+                x: 640,
+                y: 480,
+                w: 128,
+                h: 96
+            }
+        );
+        assert!(matches!(
+            Scene::new(SynthConfig::demo().scaled_to(8, 8)).unwrap_err(),
+            SynthError::InvalidSize { .. }
+        ));
     }
 }

@@ -33,6 +33,19 @@ impl SynthScene {
         })
     }
 
+    /// The named scene at another frame size (`width`, `height` in 16..=8192): its shapes,
+    /// speeds and occluders scaled with the frame, so only the pixel count changes (the app's
+    /// bench page measures the tracker at a chosen resolution with it).
+    pub fn sized(preset: Ts<ScenePreset>, width: f64, height: f64) -> Result<SynthScene, JsValue> {
+        let (w, h) = (whole_u32("width", width)?, whole_u32("height", height)?);
+        let cfg = rust(preset)?.config(0).scaled_to(w, h);
+        let scene = Scene::new(cfg).map_err(js_error)?;
+        Ok(SynthScene {
+            checkpoints: vec![scene.clone()],
+            scene,
+        })
+    }
+
     /// Frame width.
     #[wasm_bindgen(getter)]
     pub fn width(&self) -> u32 {

@@ -19,7 +19,9 @@
  * @typedef {import('../../pkg/shapetrack.js').OfflineProgress} OfflineProgress
  * @typedef {import('../../pkg/shapetrack.js').JoinJs} JoinJs
  *
- * @typedef {{ kind: 'synth', preset?: ScenePreset } | { kind: 'frames', width: number, height: number, fps: number }} SourceSpec
+ * @typedef {{ kind: 'synth', preset?: ScenePreset, width?: number, height?: number } | { kind: 'frames', width: number, height: number, fps: number }} SourceSpec
+ *   a synthetic scene given a `width` and `height` is rendered at that size (its shapes scaled
+ *   with the frame: the bench page)
  *
  * @typedef {{
  *   source: SourceSpec,

@@ -133,7 +133,9 @@ async function open(req) {
   let frames = null;
   let fps = 25;
   if (req.source.kind === 'synth') {
-    scene = new core.SynthScene(/** @type {import('../../pkg/shapetrack.js').ScenePreset} */ (req.source.preset ?? 'demo'));
+    const preset = /** @type {import('../../pkg/shapetrack.js').ScenePreset} */ (req.source.preset ?? 'demo');
+    const { width: w, height: h } = req.source;
+    scene = w !== undefined && h !== undefined ? core.SynthScene.sized(preset, w, h) : new core.SynthScene(preset);
     width = scene.width;
     height = scene.height;
     frames = scene.frames;
