@@ -46,6 +46,8 @@ export function serviceWorker({ source, lazy = [] }) {
   return {
     name: 'shapetrack-service-worker',
     apply: 'build',
+    // After Vite's HTML plugin has emitted the pages, so the bench page is precached too.
+    enforce: 'post',
     generateBundle(_options, bundle) {
       const split = splitBundle(/** @type {any} */ (bundle), lazy);
       const code = readFileSync(source, 'utf8')

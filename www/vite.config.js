@@ -20,7 +20,7 @@ export default defineConfig({
     // The wasm is fetched by URL (instantiateStreaming), never inlined as base64.
     assetsInlineLimit: 0,
     // Two pages: the app, and the bench page (fps for a chosen resolution and detector).
-    rollupOptions: { input: { main: `${root}index.html`, bench: `${root}bench.html` } },
+    rollupOptions: { input: { index: `${root}index.html`, bench: `${root}bench.html` } },
   },
   // The SSD detector's model and TFLite runtime (from npm packages) are emitted by the worker
   // build, which is the only one that runs them; the page's instance serves them in dev.

@@ -123,7 +123,7 @@ test('after one visit the app loads, imports, draws and exports with the network
   await page.close();
 });
 
-test('the install precaches the app shell and the wasm, not the SSD detector\'s files', () => {
+test('the install precaches the app shell, the bench page and the wasm, not the SSD detector\'s files', () => {
   const code = readFileSync(join(DIST, 'sw.js'), 'utf8');
   const list = (/** @type {string} */ name) => {
     const m = new RegExp(`const ${name} = .*?JSON\\.parse\\((".*?")\\)`).exec(code);
@@ -132,7 +132,7 @@ test('the install precaches the app shell and the wasm, not the SSD detector\'s 
   };
   const precache = list('PRECACHE');
   assert.deepEqual(list('LAZY'), ['ssd/']);
-  for (const want of [/^\.\/$/, /^assets\/index-.+\.js$/, /^assets\/worker-.+\.js$/, /^assets\/shapetrack_bg-.+\.wasm$/]) {
+  for (const want of [/^\.\/$/, /^assets\/index-.+\.js$/, /^assets\/worker-.+\.js$/, /^assets\/shapetrack_bg-.+\.wasm$/, /^bench\.html$/, /^assets\/bench-.+\.js$/]) {
     assert.ok(precache.some((f) => want.test(f)), `${want} precached: ${precache}`);
   }
   assert.ok(!precache.some((f) => f.startsWith('ssd/') || f.endsWith('.tflite') || f.includes('tflite_web_api')), `${precache}`);
