@@ -160,15 +160,32 @@ pub(crate) struct ColourModel {
     bg: Vec<f32>,
 }
 
+/// Where around a mask the background is learnt: the pixels farther than `guard` px from it
+/// and at most `guard + width` px.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Ring {
+    /// Pixels next to the outline left out of the background (in frame pixels).
+    pub guard: f64,
+    /// Width of the ring beyond the guard (in frame pixels).
+    pub width: f64,
+}
+
 impl ColourModel {
-    /// Histograms of `mask`'s pixels and of the ring of pixels within `ring` px around it.
-    pub fn learn(frame: &Frame<'_>, mask: &Mask, ring: f64, max_side: u32) -> ColourModel {
+    /// Histograms of `mask`'s pixels and of the `ring` around it.
+    pub fn learn(frame: &Frame<'_>, mask: &Mask, ring: &Ring, max_side: u32) -> ColourModel {
         let (fg, bg) = histograms(frame, mask, ring, max_side);
         ColourModel { fg, bg }
     }
 
     /// Blends in the histograms of a new view at `rate` (0 keeps the old model).
-    pub fn update(&mut self, frame: &Frame<'_>, mask: &Mask, ring: f64, max_side: u32, rate: f32) {
+    pub fn update(
+        &mut self,
+        frame: &Frame<'_>,
+        mask: &Mask,
+        ring: &Ring,
+        max_side: u32,
+        rate: f32,
+    ) {
         let (fg, bg) = histograms(frame, mask, ring, max_side);
         for (a, b) in self.fg.iter_mut().zip(&fg) {
             *a = (1.0 - rate) * *a + rate * b;
@@ -187,14 +204,15 @@ impl ColourModel {
     }
 }
 
-fn histograms(frame: &Frame<'_>, mask: &Mask, ring: f64, max_side: u32) -> (Vec<f32>, Vec<f32>) {
+fn histograms(frame: &Frame<'_>, mask: &Mask, ring: &Ring, max_side: u32) -> (Vec<f32>, Vec<f32>) {
     let mut fg = vec![0f32; BINS];
     let mut bg = vec![0f32; BINS];
     let m = mask.tight();
     if m.is_empty() {
         return (fg, bg);
     }
-    let r = ring.max(1.0).ceil() as i32;
+    let outer = ring.guard.max(0.0) + ring.width.max(1.0);
+    let r = outer.ceil() as i32;
     let (fw, fh) = (frame.width() as i32, frame.height() as i32);
     let x0 = (m.x() - r).max(0);
     let y0 = (m.y() - r).max(0);
@@ -206,7 +224,10 @@ fn histograms(frame: &Frame<'_>, mask: &Mask, ring: f64, max_side: u32) -> (Vec<
     let grid = Grid::new(x0, y0, x1, y1, max_side);
     let cells = grid.sample_mask(&m);
     let sd = signed_distance(&cells, grid.gw, grid.gh);
-    let ring_cells = (ring / grid.step as f64) as f32;
+    let (guard_cells, outer_cells) = (
+        (ring.guard.max(0.0) / grid.step as f64) as f32,
+        (outer / grid.step as f64) as f32,
+    );
     for gy in 0..grid.gh {
         for gx in 0..grid.gw {
             let i = gy * grid.gw + gx;
@@ -216,7 +237,7 @@ fn histograms(frame: &Frame<'_>, mask: &Mask, ring: f64, max_side: u32) -> (Vec<
             };
             if cells[i] != 0 {
                 fg[bin(rgb)] += 1.0;
-            } else if -sd[i] <= ring_cells {
+            } else if -sd[i] > guard_cells && -sd[i] <= outer_cells {
                 bg[bin(rgb)] += 1.0;
             }
         }
