@@ -195,6 +195,26 @@ impl ColourModel {
         }
     }
 
+    /// The pixels of `mask` that are in `keep`, or whose colour's [`llr`](Self::llr) exceeds
+    /// `min_llr`, cropped to their bounding rectangle.
+    pub fn vet(&self, frame: &Frame<'_>, mask: &Mask, keep: &Mask, min_llr: f32) -> Mask {
+        let (x0, y0, w, h) = (mask.x(), mask.y(), mask.width(), mask.height());
+        let data = (0..h as i32)
+            .flat_map(|y| (0..w as i32).map(move |x| (x0 + x, y0 + y)))
+            .map(|(x, y)| {
+                let coloured = || {
+                    u32::try_from(x)
+                        .ok()
+                        .zip(u32::try_from(y).ok())
+                        .and_then(|(x, y)| frame.rgb_at(x, y))
+                        .is_some_and(|c| self.llr(c) > min_llr)
+                };
+                u8::from(mask.get(x, y) && (keep.get(x, y) || coloured()))
+            })
+            .collect();
+        Mask::new(x0, y0, w, h, data).map_or_else(|_| Mask::empty(), |m| m.tight())
+    }
+
     /// Clamped log-likelihood ratio foreground : background of a colour.
     pub fn llr(&self, rgb: [u8; 3]) -> f32 {
         let b = bin(rgb);
@@ -414,5 +434,38 @@ mod tests {
         let sd = signed_distance(&cells, gw, gh);
         assert!(sd[4 * gw + 4] > 2.0);
         assert!(sd[0] < -1.5);
+    }
+
+    #[test]
+    fn vet_drops_background_coloured_pixels_outside_the_kept_mask() {
+        // A red square (10..30) on blue: the model learns red as target, blue as surroundings.
+        let (w, h) = (40u32, 40u32);
+        let inside = |x: u32, y: u32| (10..30).contains(&x) && (10..30).contains(&y);
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                if inside(i % w, i / w) {
+                    [200, 30, 30]
+                } else {
+                    [30, 30, 200]
+                }
+            })
+            .collect();
+        let frame = Frame::rgb(&rgb, w, h).unwrap();
+        let square = Mask::new(10, 10, 20, 20, vec![1; 400]).unwrap();
+        let ring = Ring {
+            guard: 2.0,
+            width: 6.0,
+        };
+        let model = ColourModel::learn(&frame, &square, &ring, 64);
+        // A detection 4 px too tall at the bottom (blue): the blue rows go unless kept.
+        let loose = Mask::new(10, 10, 20, 24, vec![1; 480]).unwrap();
+        let vetted = model.vet(&frame, &loose, &Mask::empty(), -1.0);
+        assert_eq!(vetted.area(), 400);
+        assert_eq!((vetted.x(), vetted.y(), vetted.height()), (10, 10, 20));
+        // Pixels in `keep` stay whatever their colour.
+        let keep = Mask::new(10, 30, 20, 2, vec![1; 40]).unwrap();
+        assert_eq!(model.vet(&frame, &loose, &keep, -1.0).area(), 440);
+        // A bound no colour reaches keeps only `keep`'s pixels.
+        assert_eq!(model.vet(&frame, &loose, &keep, 10.0).area(), 40);
     }
 }

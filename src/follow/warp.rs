@@ -84,6 +84,44 @@ pub fn rasterize_polygon(poly: &[Point], img_w: u32, img_h: u32) -> Mask {
         .unwrap_or_else(|_| Mask::empty())
 }
 
+/// The pixels of `mask` within `reach` pixels of `near` (Chebyshev distance: `near` grown by
+/// a square of side `2·reach + 1`), cropped to their bounding rectangle. Linear in the area of
+/// `mask`'s rectangle grown by `reach`: two passes of running sums, rows then columns.
+pub(crate) fn within_reach(mask: &Mask, near: &Mask, reach: u32) -> Mask {
+    if mask.is_empty() || near.is_empty() {
+        return Mask::empty();
+    }
+    let k = reach as usize;
+    let (x0, y0) = (mask.x(), mask.y());
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    let (ew, eh) = (w + 2 * k, h + 2 * k);
+    // Rows of the grown rectangle: is any pixel of `near` within `reach` columns?
+    let mut rows = vec![0u8; eh * w];
+    let mut sum = vec![0u32; ew + 1];
+    for ey in 0..eh {
+        let y = y0 - k as i32 + ey as i32;
+        for ex in 0..ew {
+            sum[ex + 1] = sum[ex] + u32::from(near.get(x0 - k as i32 + ex as i32, y));
+        }
+        for x in 0..w {
+            rows[ey * w + x] = u8::from(sum[x + 2 * k + 1] > sum[x]);
+        }
+    }
+    // Then columns: within `reach` rows of such a pixel.
+    let data = mask.data();
+    let mut out = vec![0u8; w * h];
+    let mut col = vec![0u32; eh + 1];
+    for x in 0..w {
+        for ey in 0..eh {
+            col[ey + 1] = col[ey] + u32::from(rows[ey * w + x]);
+        }
+        for y in 0..h {
+            out[y * w + x] = u8::from(data[y * w + x] != 0 && col[y + 2 * k + 1] > col[y]);
+        }
+    }
+    Mask::new(x0, y0, w as u32, h as u32, out).map_or_else(|_| Mask::empty(), |m| m.tight())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -109,5 +147,34 @@ mod tests {
         ];
         let m = rasterize_polygon(&p, 10, 10);
         assert_eq!(m.area(), 12);
+    }
+
+    #[test]
+    fn within_reach_matches_a_brute_force_search() {
+        // Two overlapping blobs drawn by a hash, so edges run in every direction.
+        let blob = |x0: i32, y0: i32, salt: u32| {
+            let (w, h) = (23u32, 17u32);
+            let data = (0..w * h)
+                .map(|i| {
+                    let v = (i ^ salt).wrapping_mul(2_654_435_761) >> 29;
+                    u8::from(v < 5)
+                })
+                .collect();
+            Mask::new(x0, y0, w, h, data).unwrap()
+        };
+        let (m, near) = (blob(5, 7, 3), blob(14, 3, 11));
+        for reach in [0u32, 1, 2, 5] {
+            let got = within_reach(&m, &near, reach);
+            let k = reach as i32;
+            let mut want = 0;
+            for (x, y) in m.pixels() {
+                let hit = (-k..=k).any(|dy| (-k..=k).any(|dx| near.get(x + dx, y + dy)));
+                assert_eq!(got.get(x, y), hit, "reach {reach} at ({x}, {y})");
+                want += u64::from(hit);
+            }
+            assert_eq!(got.area(), want, "reach {reach}");
+        }
+        assert!(within_reach(&m, &Mask::empty(), 3).is_empty());
+        assert!(within_reach(&Mask::empty(), &near, 3).is_empty());
     }
 }

@@ -38,8 +38,15 @@ test('a run from the URL reports fps and per-frame times at the size asked for',
   assert.equal(r.detector, 'background');
   assert.equal(r.frames, 20);
   assert.equal(r.offline, false);
-  for (const k of ['fps', 'detect', 'track', 'worker', 'page']) {
+  // Browsers coarsen performance.now() (to 0.1 ms in a page that is not cross-origin isolated),
+  // so a short stage at 320x180 can have a median of exactly 0 (the page's few rectangles did,
+  // in CI): the stages must be measured (finite, not negative); the whole frame and the rate
+  // must be positive.
+  for (const k of ['fps', 'worker']) {
     assert.ok(Number.isFinite(r[k]) && r[k] > 0, `${k} = ${r[k]}`);
+  }
+  for (const k of ['detect', 'track', 'page']) {
+    assert.ok(Number.isFinite(r[k]) && r[k] >= 0, `${k} = ${r[k]}`);
   }
   // The worker's time holds its detect and track times.
   assert.ok(r.worker >= r.detect && r.worker >= r.track, JSON.stringify(r));
