@@ -1,5 +1,6 @@
 //! Moving a mask by a fitted transform, and rasterising polygons.
 
+use crate::detect::Morphology;
 use crate::features::transform::Transform;
 use crate::frame::{Mask, Point};
 use crate::synth::raster::Rasterizer;
@@ -85,8 +86,9 @@ pub fn rasterize_polygon(poly: &[Point], img_w: u32, img_h: u32) -> Mask {
 }
 
 /// The pixels of `mask` within `reach` pixels of `near` (Chebyshev distance: `near` grown by
-/// a square of side `2·reach + 1`), cropped to their bounding rectangle. Linear in the area of
-/// `mask`'s rectangle grown by `reach`: two passes of running sums, rows then columns.
+/// a square of side `2·reach + 1`, the detectors' [`Morphology::dilate`]), cropped to their
+/// bounding rectangle. Only `near`'s pixels in `mask`'s rectangle grown by `reach` can reach
+/// it, so the dilation runs on that rectangle alone.
 pub(crate) fn within_reach(mask: &Mask, near: &Mask, reach: u32) -> Mask {
     if mask.is_empty() || near.is_empty() {
         return Mask::empty();
@@ -95,30 +97,19 @@ pub(crate) fn within_reach(mask: &Mask, near: &Mask, reach: u32) -> Mask {
     let (x0, y0) = (mask.x(), mask.y());
     let (w, h) = (mask.width() as usize, mask.height() as usize);
     let (ew, eh) = (w + 2 * k, h + 2 * k);
-    // Rows of the grown rectangle: is any pixel of `near` within `reach` columns?
-    let mut rows = vec![0u8; eh * w];
-    let mut sum = vec![0u32; ew + 1];
-    for ey in 0..eh {
-        let y = y0 - k as i32 + ey as i32;
-        for ex in 0..ew {
-            sum[ex + 1] = sum[ex] + u32::from(near.get(x0 - k as i32 + ex as i32, y));
-        }
-        for x in 0..w {
-            rows[ey * w + x] = u8::from(sum[x + 2 * k + 1] > sum[x]);
-        }
-    }
-    // Then columns: within `reach` rows of such a pixel.
+    let (gx0, gy0) = (x0 - k as i32, y0 - k as i32);
+    let mut grown: Vec<u8> = (0..eh as i32)
+        .flat_map(|y| (0..ew as i32).map(move |x| (gx0 + x, gy0 + y)))
+        .map(|(x, y)| u8::from(near.get(x, y)))
+        .collect();
+    Morphology::new().dilate(&mut grown, ew, eh, reach);
     let data = mask.data();
-    let mut out = vec![0u8; w * h];
-    let mut col = vec![0u32; eh + 1];
-    for x in 0..w {
-        for ey in 0..eh {
-            col[ey + 1] = col[ey] + u32::from(rows[ey * w + x]);
-        }
-        for y in 0..h {
-            out[y * w + x] = u8::from(data[y * w + x] != 0 && col[y + 2 * k + 1] > col[y]);
-        }
-    }
+    let out = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            u8::from(data[i] != 0 && grown[(y + k) * ew + x + k] != 0)
+        })
+        .collect();
     Mask::new(x0, y0, w as u32, h as u32, out).map_or_else(|_| Mask::empty(), |m| m.tight())
 }
 
