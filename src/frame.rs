@@ -560,10 +560,10 @@ impl From<Mask> for RawMask {
 /// The tight box of the foreground of a `width`-wide 0/1 bitmap placed at `(x, y)` (the zero
 /// box when empty).
 fn foreground_box(x: i32, y: i32, width: u32, data: &[u8]) -> BBox {
-    let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
     if width == 0 {
         return BBox::default();
     }
+    let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
     for (ly, row) in data.chunks_exact(width as usize).enumerate() {
         if let (Some(a), Some(b)) = (
             row.iter().position(|&v| v != 0),
@@ -805,15 +805,11 @@ impl Mask {
         Mask {
             x: self.x + dx,
             y: self.y + dy,
+            // An empty mask's box stays the zero box, as `bbox` promises.
             fg_box: if self.area == 0 {
                 BBox::default()
             } else {
-                BBox::new(
-                    self.fg_box.x + dx as f64,
-                    self.fg_box.y + dy as f64,
-                    self.fg_box.w,
-                    self.fg_box.h,
-                )
+                self.fg_box.translated(dx as f64, dy as f64)
             },
             ..self.clone()
         }
