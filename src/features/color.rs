@@ -46,7 +46,7 @@ use linfa::traits::{Fit, Predict};
 use linfa::DatasetBase;
 use linfa_clustering::{KMeans, KMeansInit};
 use ndarray::Array2;
-use rand::distributions::{Distribution, WeightedIndex};
+use rand::distributions::{Distribution, Uniform};
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 use serde::{Deserialize, Serialize};
@@ -432,12 +432,12 @@ fn linfa_sq(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 
 /// linfa's k-means++ seeding (`KMeansInit::KMeansPlusPlus`), draw for draw: the first seed
 /// uniformly, each next one with probability proportional to the squared distance to the
-/// nearest seed so far, by the same `WeightedIndex` draws from the same generator, over
-/// distances computed in the same order; the seeds, and so the palette, are bit for bit
-/// linfa's (`tests::kmeans_is_linfas`). Why not linfa's own: it recomputes every point's
-/// distance to every seed for each new seed, on rayon's parallel iterators, and on the
-/// tracker's 150–300 colours per call that was three quarters of the k-means time (issue 10's
-/// profile); here each new seed updates the distances once.
+/// nearest seed so far, by the same draws from the same generator as linfa's `WeightedIndex`
+/// (see [`weighted_draw`]), over distances computed in the same order; the seeds, and so the
+/// palette, are bit for bit linfa's (`tests::kmeans_is_linfas`). Why not linfa's own: it
+/// recomputes every point's distance to every seed for each new seed, on rayon's parallel
+/// iterators, and on the tracker's 150–300 colours per call that was three quarters of the
+/// k-means time (issue 10's profile); here each new seed updates the distances once.
 fn plus_plus_seeds(
     data: &[[f64; 3]],
     k: usize,
@@ -447,49 +447,87 @@ fn plus_plus_seeds(
     if k == 0 || n == 0 {
         return Ok(vec![[0.0; 3]; k]);
     }
-    let first = WeightedIndex::new(std::iter::repeat_n(1.0f64, n))
-        .map_err(|e| ColorError::KMeans {
-            reason: e.to_string(),
-        })?
-        .sample(rng);
+    // `WeightedIndex` over n weights of 1: the total is n exactly, its prefix sums are the
+    // integers 1..n, so the first prefix above the draw is the draw's floor.
+    let first = (Uniform::new(0.0, n as f64).sample(rng) as usize).min(n - 1);
     let mut seeds = Vec::with_capacity(k);
     seeds.push(data[first]);
     let mut dists = vec![f64::INFINITY; n];
     for _ in 1..k {
         let last = seeds[seeds.len() - 1];
+        // The total summed as `WeightedIndex::new` sums it: in order, from the first weight.
+        let (mut total, mut valid) = (0.0f64, true);
         for (d, point) in dists.iter_mut().zip(data) {
             *d = d.min(linfa_sq(&last, point));
+            valid &= *d >= 0.0;
+            total += *d;
         }
         // All distances 0: every point is a seed already; linfa then takes point 0.
-        let next = WeightedIndex::new(dists.iter())
-            .map(|w| w.sample(rng))
-            .unwrap_or(0);
+        let next = if valid && total > 0.0 {
+            weighted_draw(&dists, total, rng)
+        } else {
+            0
+        };
         seeds.push(data[next]);
     }
     Ok(seeds)
 }
 
-/// The index of the centroid nearest to `p`, as linfa's `closest_centroid` picks it: the
-/// first of equally near ones.
-fn closest(centroids: &[[f64; 3]], p: &[f64; 3]) -> usize {
-    let mut best = (0, f64::INFINITY);
-    for (i, c) in centroids.iter().enumerate() {
-        let d = linfa_sq(c, p);
-        if d < best.1 || i == 0 {
-            best = (i, d);
+/// `WeightedIndex::new(weights).sample(rng)` (rand 0.8) without building its table of prefix
+/// sums for one draw: the same uniform draw in `[0, total)`, then the first index whose
+/// prefix sum, summed in the same order, exceeds it (the last index when none does). The
+/// k-means++ seeding draws once per seed from a new table, and its allocations were 5–8 % of
+/// the 200-shape bench (issue 10). `total` must be the weights' sum in order and positive.
+fn weighted_draw(weights: &[f64], total: f64, rng: &mut Xoshiro256Plus) -> usize {
+    let chosen = Uniform::new(0.0, total).sample(rng);
+    let mut prefix = 0.0;
+    for (i, w) in weights
+        .iter()
+        .enumerate()
+        .take(weights.len().saturating_sub(1))
+    {
+        prefix += w;
+        if prefix > chosen {
+            return i;
         }
     }
-    best.0
+    weights.len().saturating_sub(1)
+}
+
+/// The index of the centroid nearest to `p`, as linfa's `closest_centroid` picks it (the
+/// first of equally near ones), its squared distance, and the squared distance to the
+/// nearest other one (infinite with one centroid).
+fn closest_two(centroids: &[[f64; 3]], p: &[f64; 3]) -> (usize, f64, f64) {
+    let (mut best, mut d1, mut d2) = (0, f64::INFINITY, f64::INFINITY);
+    for (i, c) in centroids.iter().enumerate() {
+        let d = linfa_sq(c, p);
+        if d < d1 || i == 0 {
+            d2 = d1;
+            (best, d1) = (i, d);
+        } else {
+            d2 = d2.min(d);
+        }
+    }
+    (best, d1, d2)
 }
 
 /// linfa's Lloyd iterations for one run (`KMeansValidParams::fit`), step for step, then its
-/// `predict`: memberships by [`closest`]; each new centroid is the mean of its members *and
+/// `predict`: memberships by [`closest_two`]; each new centroid is the mean of its members *and
 /// the old centroid* (linfa's "m_k-means", which keeps empty clusters where they were), summed
 /// in input order; stop when the centroids moved less than `tolerance` (the Euclidean norm
 /// over all of them) or after `max_iterations`; labels against the final centroids. Written
 /// here because linfa runs each step on rayon's parallel iterators over `ndarray` rows, which
 /// on the tracker's few hundred colours per call cost several times the arithmetic (issue
 /// 10); `tests::kmeans_is_linfas` checks centroids and labels are linfa's bit for bit.
+///
+/// Memberships skip the points whose centroid cannot have changed (Hamerly, "Making k-means
+/// even faster", SDM 2010): each point keeps an upper bound on its distance to its own
+/// centroid and a lower bound on its distance to every other, moved by how far the centroids
+/// moved; while the upper bound is below the lower one its own centroid is strictly the
+/// nearest, which is what [`closest_two`] would answer. The bounds keep a margin far above the
+/// rounding of the distances, so a point near a tie is always recomputed and the labels stay
+/// linfa's. After the first steps most points keep their colour (on the 200-shape bench,
+/// Lloyd was a tenth of the frame).
 fn lloyd(
     data: &[[f64; 3]],
     mut centroids: Vec<[f64; 3]>,
@@ -498,11 +536,24 @@ fn lloyd(
 ) -> (Vec<[f64; 3]>, Vec<usize>) {
     let k = centroids.len();
     let mut labels = vec![0usize; data.len()];
+    // Bounds on Euclidean distances (not squared: the triangle inequality moves them).
+    let mut upper = vec![f64::INFINITY; data.len()];
+    let mut lower = vec![0.0f64; data.len()];
+    let assign =
+        |centroids: &[[f64; 3]], labels: &mut [usize], upper: &mut [f64], lower: &mut [f64]| {
+            for (((l, p), u), lo) in labels.iter_mut().zip(data).zip(upper).zip(lower) {
+                // Colours are in [0, 255]: distances below ~450, rounding below 1e-12.
+                if *u + 1e-6 < *lo {
+                    continue;
+                }
+                let (best, d1, d2) = closest_two(centroids, p);
+                (*l, *u, *lo) = (best, d1.sqrt(), d2.sqrt());
+            }
+        };
+    let mut shift = vec![0.0f64; k];
     let mut n_iter = 0u64;
     loop {
-        for (l, p) in labels.iter_mut().zip(data) {
-            *l = closest(&centroids, p);
-        }
+        assign(&centroids, &mut labels, &mut upper, &mut lower);
         let mut next = vec![[0.0f64; 3]; k];
         let mut counts = vec![1usize; k];
         for (p, &l) in data.iter().zip(&labels) {
@@ -528,15 +579,30 @@ fn lloyd(
                 acc
             })
             .sqrt();
+        for ((s, a), b) in shift.iter_mut().zip(&centroids).zip(&next) {
+            *s = distance2(a, b).sqrt();
+        }
+        // The two largest moves: a point's other centroids moved at most the largest move
+        // among those that are not its own.
+        let (mut m1, mut m2, mut arg) = (0.0f64, 0.0f64, usize::MAX);
+        for (j, &s) in shift.iter().enumerate() {
+            if s > m1 {
+                (m2, m1, arg) = (m1, s, j);
+            } else {
+                m2 = m2.max(s);
+            }
+        }
+        for ((&l, u), lo) in labels.iter().zip(&mut upper).zip(&mut lower) {
+            *u += shift[l];
+            *lo -= if l == arg { m2 } else { m1 };
+        }
         centroids = next;
         n_iter += 1;
         if moved < tolerance || n_iter == max_iterations {
             break;
         }
     }
-    for (l, p) in labels.iter_mut().zip(data) {
-        *l = closest(&centroids, p);
-    }
+    assign(&centroids, &mut labels, &mut upper, &mut lower);
     (centroids, labels)
 }
 
@@ -847,7 +913,7 @@ mod tests {
     fn kmeans_is_linfas() {
         use rand::Rng;
         let mut gen = Xoshiro256Plus::seed_from_u64(5);
-        for case in 0..60u64 {
+        for case in 0..240u64 {
             let n = 1 + (case as usize * 7) % 300;
             // Few distinct colours in some cases: repeated points and all-zero distances.
             let levels = [2u32, 5, 256][case as usize % 3];
