@@ -16,11 +16,16 @@ const name = /** @type {st.ScenePreset} */ (i >= 0 ? process.argv[i + 1] : 'defa
 st.initSync({ module: readFileSync(new URL('../www/pkg/shapetrack_bg.wasm', import.meta.url)) });
 const scene = new st.SynthScene(name);
 const buf = new st.FrameBuffer(scene.width, scene.height);
-// Two passes over the scene, each with a new tracker: V8 first runs wasm from its baseline
-// compiler (Liftoff) and recompiles hot functions with TurboFan as they warm up, which on a
-// 300-frame scene takes most of the first pass (×2–3 its steady time). The second pass is the
-// steady per-frame cost a page tracking a video for more than a second or two sees; the first
-// is reported beside it.
+// Passes over the scene, each with a new tracker: V8 first runs wasm from its baseline compiler
+// (Liftoff) and recompiles hot functions with TurboFan as they warm up, which takes most of the
+// first pass (×2–4 its steady time) and, on a scene as light as `occlusion` (~60 ms a pass),
+// part of the second too. So after the first pass, passes go on until at least MIN_PASSES of
+// them and MIN_MS of tracking, and the fastest is reported: the steady per-frame cost a page
+// tracking a video for more than a few seconds sees, and on a shared machine the pass least
+// slowed by other work. The native side (`shapetrack bench --wasm`) reports its fastest of as
+// many passes; the first pass is reported beside it.
+const MIN_PASSES = 3;
+const MIN_MS = 1000;
 /** @returns {{ ms: number, detections: number, tracker: st.Tracker }} */
 function pass() {
   const tracker = new st.Tracker({ preset: 'masks' });
@@ -39,7 +44,20 @@ function pass() {
   return { ms, detections, tracker };
 }
 const cold = pass();
-const { ms, detections, tracker } = pass();
+cold.tracker.free();
+let best = pass();
+let passes = 1;
+for (let spent = best.ms; passes < MIN_PASSES || spent < MIN_MS; passes++) {
+  const p = pass();
+  spent += p.ms;
+  if (p.ms < best.ms) {
+    best.tracker.free();
+    best = p;
+  } else {
+    p.tracker.free();
+  }
+}
+const { ms, detections, tracker } = best;
 // The tracker's own phases inside wasm (milliseconds per frame), beside the native ones.
 const p = tracker.phaseTimes();
 const per = (/** @type {number} */ v) => v / scene.frames;
@@ -50,4 +68,4 @@ const phases = {
   assignment: per(p.assignment),
   update: per(p.update),
 };
-console.log(JSON.stringify({ scene: name, width: scene.width, height: scene.height, frames: scene.frames, detections_per_frame: detections / scene.frames, ms_per_frame: ms / scene.frames, first_pass_ms_per_frame: cold.ms / scene.frames, phases }));
+console.log(JSON.stringify({ scene: name, width: scene.width, height: scene.height, frames: scene.frames, detections_per_frame: detections / scene.frames, ms_per_frame: ms / scene.frames, first_pass_ms_per_frame: cold.ms / scene.frames, passes, phases }));
