@@ -632,3 +632,48 @@ fn a_box_that_grows_alone_is_not_a_merge() {
     assert_eq!(b, grown(None));
     assert!(b.w > 60.0, "{b:?}");
 }
+
+/// An object whose detector scores straddle the high threshold: one high view starts a
+/// tentative track, the next views are low. With `low_extends_tentative` they extend it until
+/// it is confirmed (under one id from its first view); without, the tentative track dies at
+/// the first low view and nothing is ever confirmed (low views never start tracks). A low view
+/// never extends a tentative track that missed the previous frame.
+#[test]
+fn low_views_extend_a_tentative_track_seen_in_the_previous_frame() {
+    let cfg = |on: bool| Config {
+        high_score: 0.8,
+        new_track_score: 0.8,
+        low_extends_tentative: on,
+        ..config()
+    };
+    let at = |x: f64, score: f64| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), score);
+    let frames: Vec<Vec<Detection>> = (0..6)
+        .map(|k| vec![at(2.0 * k as f64, if k == 0 { 0.95 } else { 0.6 })])
+        .collect();
+    let mut on = Tracker::new(cfg(true)).unwrap();
+    let out = run(&mut on, &frames);
+    let id = out.first().map(|s| s.id).expect("confirmed");
+    assert_eq!(
+        ids(&out),
+        (1..=6).map(|f| (f, id)).collect::<Vec<_>>(),
+        "every view under one id, the first included"
+    );
+    let mut off = Tracker::new(cfg(false)).unwrap();
+    assert!(run(&mut off, &frames).is_empty());
+    assert!(off
+        .tracks()
+        .iter()
+        .all(|t| t.state() != TrackState::Confirmed));
+    // A tentative track that missed a frame (kept by `max_tentative_misses`) is not extended
+    // by a low view: only tracks seen in the previous frame are.
+    let mut gap = Tracker::new(Config {
+        max_tentative_misses: 2,
+        ..cfg(true)
+    })
+    .unwrap();
+    run(&mut gap, &[vec![at(0.0, 0.95)], vec![], vec![at(4.0, 0.6)]]);
+    assert!(
+        gap.tracks().iter().all(|t| t.hits() == 1),
+        "the low view did not match"
+    );
+}

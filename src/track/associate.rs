@@ -55,6 +55,9 @@ pub enum StageTracks {
     Tentative,
     /// Confirmed, lost and tentative tracks together.
     All,
+    /// Confirmed tracks, and tentative ones matched in the previous frame (see
+    /// [`Config::low_extends_tentative`]).
+    Seen,
 }
 
 impl StageTracks {
@@ -72,6 +75,10 @@ impl StageTracks {
             StageTracks::Active => matches!(state, TrackState::Confirmed | TrackState::Lost),
             StageTracks::Tentative => state == TrackState::Tentative,
             StageTracks::All => state != TrackState::Removed,
+            StageTracks::Seen => {
+                state == TrackState::Confirmed
+                    || (state == TrackState::Tentative && track.misses() == 0)
+            }
         }
     }
 }
@@ -133,7 +140,8 @@ pub(crate) fn in_main(config: &Config, track: &Track) -> bool {
 ///    assignment, after it with [`Config::lost_second`], or not at all with
 ///    [`Config::lost_reid_only`]), up to [`Config::main_max_cost`];
 /// 2. tracks seen in the previous frame × low detections, up to [`Config::max_cost_low`]
-///    (ByteTrack's second association);
+///    (ByteTrack's second association): confirmed tracks, and tentative ones too with
+///    [`Config::low_extends_tentative`];
 /// 3. tentative tracks × high detections, up to [`Config::max_cost_tentative`], and the
 ///    re-identification of lost tracks × high detections, up to [`Config::reid_max_cost`]
 ///    (re-identification first with `lost_reid_only`, so a reappearing shape goes back to its
@@ -161,7 +169,11 @@ pub fn stages(config: &Config) -> Vec<Stage> {
     }
     out.push(main(
         "low",
-        StageTracks::Confirmed,
+        if config.low_extends_tentative {
+            StageTracks::Seen
+        } else {
+            StageTracks::Confirmed
+        },
         Low,
         config.max_cost_low,
     ));
@@ -323,6 +335,14 @@ mod tests {
         };
         assert_eq!(stages(&none)[0].tracks, StageTracks::Confirmed);
         assert_eq!(s[1].max_cost, m.max_cost_low);
+        // Low detections extend tentative tracks seen in the previous frame too, unless asked
+        // not to.
+        assert_eq!(s[1].tracks, StageTracks::Seen);
+        let confirmed_only = Config {
+            low_extends_tentative: false,
+            ..Config::default()
+        };
+        assert_eq!(stages(&confirmed_only)[1].tracks, StageTracks::Confirmed);
         assert_eq!(s[2].costs, StageCosts::Reid);
         assert_eq!(s[2].max_cost, m.reid_max_cost);
     }

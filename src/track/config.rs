@@ -294,6 +294,12 @@ pub struct Config {
     /// Highest combined cost accepted between a track and a low detection (second stage).
     /// Default 0.5: a low-confidence box must overlap the prediction well.
     pub max_cost_low: f64,
+    /// Low detections (the second association) extend tentative tracks matched in the
+    /// previous frame too, as evidence at the [`Config::birth_evidence`] weight: an object
+    /// scored around the adaptive high threshold was cut by each view just below it and
+    /// confirmed late or never (ByteTrack's second stage takes confirmed tracks only, as it
+    /// confirms on hits alone). Default true (grid: `tests/data/quality/README.md`).
+    pub low_extends_tentative: bool,
     /// Highest combined cost accepted between a tentative track and a high detection.
     /// Default 0.85: a new track's velocity is still unknown, so its prediction is loose.
     pub max_cost_tentative: f64,
@@ -452,6 +458,7 @@ impl Default for Config {
             max_cost: 0.75,
             reference_max_cost: None,
             max_cost_low: 0.5,
+            low_extends_tentative: true,
             max_cost_tentative: 0.85,
             unmatched_cost: None,
             lost_velocity_decay: 1.0,
