@@ -201,7 +201,7 @@ pub enum Preset {
     /// [`Config::default`]: tuned on MOTChallenge boxes.
     #[default]
     Default,
-    /// [`Config::masks`]: instance masks with frames (appearance in ambiguous clusters,
+    /// [`Config::masks`]: instance masks with frames (appearance in ambiguous groups,
     /// re-identification by colour and SIFT, amodal completion, fragment merging, coasting).
     Masks,
 }

@@ -5,7 +5,7 @@
 //! - **Appearance** ([`MaskFeatures::describe`], on demand): the contour resampled into a shape
 //!   context descriptor (Alg. 4), SIFT keypoints and descriptors inside the mask on a bounded
 //!   crop (Alg. 5), and a grid sample of the mask's pixels for the colour analyser (Alg. 6).
-//!   The tracker asks for it only for detections in ambiguous region clusters, for
+//!   The tracker asks for it only for detections in ambiguous groups of competing pairs, for
 //!   re-identification, and to keep each track's reference appearance fresh (see
 //!   [`crate::track::online`]); the result is shared (`Arc`) between the detection and the
 //!   track it becomes the last appearance of, so nothing is computed twice.
@@ -169,12 +169,13 @@ pub struct AppearanceConfig {
     /// Shape context settings. Default: 32 contour vertices (the χ² assignment is cubic in it;
     /// 32 costs ~0.1 ms a pair, 64 ~0.3 ms).
     pub shape_context: ShapeContextConfig,
-    /// Compute appearance only where it is needed (ambiguous clusters, re-identification,
+    /// Compute appearance only where it is needed (ambiguous groups, re-identification,
     /// reference refresh). `false` computes it for every mask detection (for comparisons).
     /// Default true.
     pub lazy: bool,
-    /// A cluster is ambiguous (its detections get appearance) when geometry and motion alone
-    /// rank two candidates of a track (or of a detection) within this much of each other.
+    /// A group of competing pairs is ambiguous (its detections get appearance) when geometry
+    /// and motion alone rank two candidates of a track (or of a detection) within this much
+    /// of each other.
     /// Default 0.2 (costs are in `[0, 1]`).
     pub ambiguity: f64,
     /// A track's reference appearance (used to re-identify it after a loss) is recomputed when

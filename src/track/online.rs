@@ -401,9 +401,8 @@ impl Tracker {
     }
 
     /// Appearance for the detections geometry cannot decide (see `describe`). With
-    /// [`Config::lost_reid_only`], lost tracks do not take part in the main association and
-    /// do not count: the reid stage describes the detections it needs once the others have
-    /// taken theirs.
+    /// [`Config::lost_reid_only`], the lost tracks outside the main association do not count:
+    /// the reid stage describes the detections it needs once the others have taken theirs.
     fn describe(&self, frame: Option<&Frame<'_>>, regions: &Regions, dets: &mut [Prepared<'_>]) {
         let Some(frame) = frame else {
             return;
@@ -412,7 +411,6 @@ impl Tracker {
             return;
         }
         let want = if self.config.appearance.lazy {
-            let reid_only = self.config.lost_reid_only;
             let counted = |t: usize| self.tracks.get(t).is_some_and(|t| in_main(&self.config, t));
             // Detections carry no appearance yet, so the appearance terms have no data here.
             let geometric = score_edges(&self.costs, &self.tracks, regions, dets, |&(t, _)| {
@@ -421,16 +419,8 @@ impl Tracker {
             let ambiguity = Ambiguity {
                 max_cost: self.config.max_cost,
                 margin: self.config.appearance.ambiguity,
-                lost_in_main: !reid_only,
             };
-            ambiguous_detections(
-                &self.tracks,
-                dets.len(),
-                regions,
-                &geometric,
-                counted,
-                &ambiguity,
-            )
+            ambiguous_detections(&self.tracks, dets.len(), &geometric, &ambiguity)
         } else {
             vec![true; dets.len()]
         };
@@ -772,7 +762,7 @@ impl Tracker {
                 continue;
             }
             let motion = (self.motion)(&d.det.bbox)?;
-            // Every track carries an appearance from birth, so that in an ambiguous cluster
+            // Every track carries an appearance from birth, so that in an ambiguous group
             // no track's pairs lack the appearance terms that its rivals' pairs have.
             let appearance = match (&d.features.appearance, frame) {
                 (Some(a), _) => Some(a.clone()),

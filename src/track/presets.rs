@@ -11,13 +11,13 @@ impl Config {
     /// `tests/data/quality/README.md`).
     ///
     /// - Geometry and motion: box IoU (weight 1) and IoA (0.5) with the (amodal) predicted
-    ///   box, and mask IoU (1) with the last mask moved by the predicted motion; in clusters
-    ///   geometry cannot decide, colour C2 joins them (weight 0.5, thesis eq. 39). Shape
-    ///   context C1 is off in the association: on the grid's clean-mask cells it decides
-    ///   nothing (identical scores), on ragged masks it gains 0.3–1.6 HOTA on four families
-    ///   but costs 2.1 on non-rigid deformation, whose changing outline it reads as another
-    ///   shape — the family where masks must beat box mode and keep one id per shape (the
-    ///   ablation in `tests/data/quality/README.md`).
+    ///   box, and mask IoU (1) with the last mask moved by the predicted motion; in groups of
+    ///   competing pairs geometry cannot decide, colour C2 joins them (weight 0.5, thesis
+    ///   eq. 39). Shape context C1 is off in the association: on the grid's clean-mask cells
+    ///   it decides nothing (identical scores), on ragged masks it gains 0.3–1.6 HOTA on four
+    ///   families but costs 2.1 on non-rigid deformation, whose changing outline it reads as
+    ///   another shape — the family where masks must beat box mode and keep one id per shape
+    ///   (the ablation in `tests/data/quality/README.md`).
     /// - A detection is taken as partly hidden only below 0.4 of the track's reference area
     ///   (`appearance.whole_ratio`): shapes that deform change area by up to ±50 % while in
     ///   full view, and 0.85 read that as occlusion (and split them into several identities).
