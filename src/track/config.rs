@@ -339,6 +339,12 @@ pub struct Config {
     /// for re-identification by appearance. Default 0; the mask preset uses its coasting span
     /// (8): a track reported at its prediction is also matched there.
     pub lost_main_frames: u32,
+    /// In the main association, a confirmed or lost track gives up a detection that a
+    /// tentative track matched in the previous frame and before matches at a cost lower by more than this
+    /// margin (see [`super::associate`]): the tentative tracks' own stage comes later, and a
+    /// track sliding behind a new shape would otherwise take the new shape's view and swap
+    /// with it. `None`: tentative tracks wait. Default `None`; the mask preset 0.1.
+    pub defer_to_tentative: Option<f64>,
     /// The pair-cost terms of the main association. Default: IoU with the predicted box, mask
     /// IoU (masks only), and shape context + colour at 0.5/0.5 (when registered, with data).
     pub terms: Terms,
@@ -467,6 +473,7 @@ impl Default for Config {
             tentative_first: false,
             lost_reid_only: false,
             lost_main_frames: 0,
+            defer_to_tentative: None,
             terms: Terms::default(),
             reid_terms: Terms::reid_default(),
             reid_at_confirmation: false,
@@ -574,6 +581,9 @@ impl Config {
             if let Some(g) = t.gate {
                 check(&format!("terms.{name}.gate"), g, true, "must be finite")?;
             }
+        }
+        if let Some(m) = self.defer_to_tentative {
+            check("defer_to_tentative", m, m >= 0.0, "must be ≥ 0")?;
         }
         if let Some(w) = self.birth_evidence {
             check(
