@@ -247,7 +247,9 @@ impl Stage {
             .filter(|&&(t, d, c, gate)| {
                 free(t, d, gate)
                     && self.offers(&tracks[t], &dets[d])
-                    && c.partial_cmp(&deferred[d]) != Some(std::cmp::Ordering::Greater)
+                    && deferred
+                        .get(d)
+                        .is_none_or(|&x| c.partial_cmp(&x) != Some(std::cmp::Ordering::Greater))
             })
             .map(|&(t, d, c, _)| (t, d, c))
             .collect();
@@ -266,13 +268,13 @@ impl Stage {
         }
         Ok(())
     }
-}
 
-impl Stage {
     /// Per detection, the cost above which this stage's tracks give it up to a tentative
     /// track (infinite where none claims it): the cheapest free pair, passing this stage's
     /// gate, of a tentative track matched in the previous frame with at least
-    /// [`DEFER_MIN_HITS`] matches, plus the [`Stage::defer`] margin.
+    /// [`DEFER_MIN_HITS`] matches, plus the [`Stage::defer`] margin. Empty (nothing
+    /// allocated) when the stage does not defer, as every stage but the mask preset's main
+    /// one.
     ///
     /// The tentative tracks' stage runs after the main one, so without this a confirmed
     /// track that slides behind a new shape (its own view hidden, its prediction still near)
@@ -286,10 +288,10 @@ impl Stage {
         edges: &[Edge],
         free: &impl Fn(usize, usize, f64) -> bool,
     ) -> Vec<f64> {
-        let mut out = vec![f64::INFINITY; dets.len()];
         let Some(margin) = self.defer else {
-            return out;
+            return Vec::new();
         };
+        let mut out = vec![f64::INFINITY; dets.len()];
         for &(t, d, c, gate) in edges {
             let tr = &tracks[t];
             let claims = tr.state() == TrackState::Tentative
