@@ -606,6 +606,61 @@ fn lloyd(
     (centroids, labels)
 }
 
+/// The share of `b`'s samples whose colour the view `a` does not have, over `a`'s own palette
+/// `pa` ([`view_palette`]): each `b` sample takes the nearest of `a`'s palette colours, and is
+/// foreign when that colour is rare in `a` (under `rare` of its samples) or when the sample
+/// lies farther from it than `a`'s own farthest sample of that colour plus
+/// `cfg.color_tolerance` (a colour `a`'s samples never came near). In `[0, 1]`.
+///
+/// A cheap relative of the containment a joint palette measures (the share of `b`'s samples
+/// whose joint label is rare in `a`): `a`'s k-means runs once per view and each comparison is
+/// one nearest-colour pass over `b`'s samples. It is not the same measure (a joint k-means can
+/// split a colour `a` has into a shade only `b` has, and can merge a rare colour of `a` into a
+/// common one), so the tracker uses it only to screen out pairs it finds almost wholly foreign
+/// (`track::ColourCost`).
+pub fn foreign_share(
+    (a, pa): (&ColorSample, &ViewPalette),
+    b: &ColorSample,
+    rare: f64,
+    cfg: &ColorConfig,
+) -> Result<f64, ColorError> {
+    cfg.validate()?;
+    let a = checked(a)?;
+    let b = checked(b)?;
+    if b.rgb.is_empty() {
+        return Err(ColorError::EmptySample { which: "B" });
+    }
+    if pa.labels.len() != a.len() || pa.centroids.is_empty() {
+        return Err(ColorError::LengthMismatch {
+            positions: a.len(),
+            rgb: pa.labels.len(),
+        });
+    }
+    // Each palette colour's reach, from the view's own samples: a colour k-means fitted to a
+    // broad spread of shades covers a wider neighbourhood than a tight one.
+    let k = pa.centroids.len();
+    let mut reach = vec![0.0f64; k];
+    for (c, &l) in a.rgb.iter().zip(&pa.labels) {
+        if let (Some(r), Some(centroid)) = (reach.get_mut(l), pa.centroids.get(l)) {
+            *r = r.max(distance2(&c.map(f64::from), centroid).sqrt());
+        }
+    }
+    let share = pa.histogram();
+    let foreign = b
+        .rgb
+        .iter()
+        .filter(|c| {
+            let (l, d2, _) = closest_two(&pa.centroids, &c.map(f64::from));
+            let common = share.get(l).is_some_and(|&h| h >= rare);
+            let near = reach
+                .get(l)
+                .is_some_and(|&r| d2.sqrt() <= r + cfg.color_tolerance);
+            !(common && near)
+        })
+        .count();
+    Ok(foreign as f64 / b.rgb.len() as f64)
+}
+
 /// One shape's own palette ([`view_palette`]) and its samples' labels in it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ViewPalette {
@@ -952,6 +1007,45 @@ mod tests {
             assert_eq!(ours.0, centroids, "case {case}");
             assert_eq!(ours.1, labels, "case {case}");
         }
+    }
+
+    /// `n` samples on a row, one pixel apart, each `colour` with a small deterministic jitter.
+    fn samples(n: usize, colour: [u8; 3]) -> ColorSample {
+        let positions = (0..n).map(|i| Point::new(i as f64 + 0.5, 0.5)).collect();
+        let rgb = (0..n)
+            .map(|i| colour.map(|c| c.saturating_add((i % 5) as u8)))
+            .collect();
+        ColorSample::new(positions, rgb, 1.0).unwrap()
+    }
+
+    fn joined(parts: &[ColorSample]) -> ColorSample {
+        let rgb: Vec<[u8; 3]> = parts.iter().flat_map(|p| p.rgb.clone()).collect();
+        let positions = (0..rgb.len())
+            .map(|i| Point::new(i as f64 + 0.5, 0.5))
+            .collect();
+        ColorSample::new(positions, rgb, 1.0).unwrap()
+    }
+
+    #[test]
+    fn foreign_share_counts_the_colours_a_view_does_not_have() {
+        let cfg = ColorConfig::default();
+        let (red, blue, green, yellow) =
+            ([200, 20, 20], [20, 20, 200], [20, 200, 20], [220, 220, 0]);
+        // A whole view: red and blue, and a speck of yellow (2 of 102 samples).
+        let a = joined(&[samples(60, red), samples(40, blue), samples(2, yellow)]);
+        let pa = view_palette(&a, &cfg).unwrap();
+        let share = |b: &ColorSample| foreign_share((&a, &pa), b, 0.03, &cfg).unwrap();
+        // A sliver showing one of its colours has nothing foreign.
+        assert_eq!(share(&samples(20, red)), 0.0);
+        assert_eq!(share(&joined(&[samples(10, red), samples(10, blue)])), 0.0);
+        // A colour it never had, and one it had too little of, are foreign.
+        assert_eq!(share(&samples(20, green)), 1.0);
+        assert_eq!(share(&samples(20, yellow)), 1.0);
+        assert_eq!(share(&joined(&[samples(10, red), samples(10, green)])), 0.5);
+        // Nothing to compare is an error, not a share.
+        assert!(foreign_share((&a, &pa), &ColorSample::default(), 0.03, &cfg).is_err());
+        let other = view_palette(&samples(5, red), &cfg).unwrap();
+        assert!(foreign_share((&a, &other), &samples(3, red), 0.03, &cfg).is_err());
     }
 
     #[test]
