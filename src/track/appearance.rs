@@ -140,7 +140,7 @@ const SCREEN_SHARE: f64 = 0.9;
 /// The highest colour gate under which [`SCREEN_SHARE`] screens pairs: far enough below it
 /// that a pair the screen rejects fails the gate by the joint palette too: of the 15,234 pairs
 /// the mask preset compared this way on the robustness grid's mask cells (online) and the
-/// 200-shape bench, the screen rejects 13,614, and 9 of those would have passed its gate of
+/// 200-shape bench, the screen rejects 11,452, and 9 of those would have passed its gate of
 /// 0.35 by the joint palette.
 const SCREEN_MAX_GATE: f64 = 0.5;
 
@@ -344,7 +344,8 @@ mod tests {
     use crate::track::features::{AppearanceConfig, Features};
     use std::sync::Arc;
 
-    /// `n` samples on a row, one pixel apart: `colours` in turn, `counts[i]` of colour `i`.
+    /// Samples on a row, one pixel apart: each part's count of its colour in turn, with a small
+    /// deterministic jitter.
     fn sample(parts: &[([u8; 3], usize)]) -> ColorSample {
         let rgb: Vec<[u8; 3]> = parts
             .iter()
