@@ -82,6 +82,36 @@ fn tentative_track_dies_on_its_first_miss() {
     assert_eq!(t.ids_issued(), 0);
 }
 
+/// Frames a tentative track survives without a match under `max_tentative_misses` = 4 (a
+/// count at `frame_counts_at` = 30 fps) at the video's frame rate `fps`.
+fn tentative_survival(fps: Option<f64>) -> usize {
+    let mut t = Tracker::new(Config {
+        max_tentative_misses: 4,
+        frame_rate: fps,
+        ..config()
+    })
+    .unwrap();
+    t.update(None, &[det(0.0, 0.0)]).unwrap();
+    let mut missed = 0;
+    while !t.tracks().is_empty() && missed < 100 {
+        t.update(None, &[]).unwrap();
+        missed += 1;
+    }
+    missed - 1
+}
+
+#[test]
+fn the_tentative_miss_allowance_is_a_time_scaled_to_the_frame_rate() {
+    // Unknown rate: the count as given; 30 fps: the same; 60 fps: twice the frames; 15 fps:
+    // half; 5 fps: 4 × 5 / 30 rounds to 1, and never below 1.
+    assert_eq!(tentative_survival(None), 4);
+    assert_eq!(tentative_survival(Some(30.0)), 4);
+    assert_eq!(tentative_survival(Some(60.0)), 8);
+    assert_eq!(tentative_survival(Some(15.0)), 2);
+    assert_eq!(tentative_survival(Some(5.0)), 1);
+    assert_eq!(tentative_survival(Some(1.0)), 1);
+}
+
 /// An object moving 3 px a frame, seen in frames 1–2 and 4–5 (each piece too short to be
 /// confirmed, each removed at its first miss) and from frame 8 on, and a one-off pair of views
 /// far away in frames 1–2. Returns every shape reported.

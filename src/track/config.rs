@@ -259,8 +259,11 @@ pub struct Config {
     /// Fewest matches confirmation needs however low the frame rate (see
     /// [`Config::confirm_hits`]). Default: `u32::MAX`, i.e. `min_hits` is not scaled.
     pub min_hits_floor: u32,
-    /// Frames a tentative track may go unmatched before it is dropped. Default 1: a detector
-    /// that misses one frame in a few should not make every birth start over.
+    /// Frames in a row a tentative track may go unmatched before it is dropped, at
+    /// [`Config::frame_counts_at`] frames per second (scaled to the video's
+    /// [`Config::frame_rate`] when known, at least 1 unless 0: the allowance is a time, like
+    /// `max_lost`). Default 1: a detector that misses one frame in a few should not make
+    /// every birth start over.
     pub max_tentative_misses: u32,
     /// Frames a confirmed track stays lost (searchable, re-identified under its id) before it
     /// is removed, at [`Config::frame_counts_at`] frames per second (scaled to the video's

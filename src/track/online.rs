@@ -684,7 +684,7 @@ impl Tracker {
     /// Unmatched tracks miss a frame; removed ones are dropped.
     fn age(&mut self, matched: &[bool]) {
         let (tentative, lost) = (
-            self.config.max_tentative_misses,
+            self.config.frames(self.config.max_tentative_misses),
             self.config.frames(self.config.max_lost),
         );
         let hindsight = self
