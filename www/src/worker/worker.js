@@ -5,9 +5,15 @@
 // The worker also paints the page's frame canvas (an OffscreenCanvas handed over once): a
 // tracked frame is painted straight from wasm memory right before its result is posted, so
 // the page only draws the overlay and no frame is copied back and forth.
+//
+// The synthetic scene's frames are rendered ahead by a second worker, the scene feeder
+// (./feed.js), on another core; this worker renders them itself only for the "scene masks"
+// detector (which needs the scene's own detections, in this worker's memory) or when the
+// feeder is unavailable.
 
 import { loadCore } from '../lib/core.js';
 import { createDetector } from './detectors.js';
+import { SceneFeed } from './feed.js';
 
 /** @typedef {import('../lib/core.js').Core} Core */
 /** @typedef {import('./protocol.js').Request & { id: number }} Req */
@@ -24,6 +30,7 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
  *   tracker: import('../../pkg/shapetrack.js').Tracker,
  *   detector: import('./detectors.js').Detector,
  *   scene: import('../../pkg/shapetrack.js').SynthScene | null,
+ *   feed: SceneFeed | null,
  *   canvas: OffscreenCanvas | null,
  *   ctx2d: OffscreenCanvasRenderingContext2D | null,
  *   follower: import('../../pkg/shapetrack.js').Follower | null,
@@ -35,8 +42,9 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
  *     offline: import('../../pkg/shapetrack.js').OfflineSettings | null,
  *   },
  *   reported: boolean,
- * }} Session  `follower`: the shape being followed (`followStart`); `followTo`: the frame its
- *   leg ends at; `cache`: synthetic frames rendered ahead of a backward leg (see `sceneFrame`);
+ * }} Session  `feed`: the scene feeder rendering the synthetic frames ahead (null: this worker
+ *   renders them); `follower`: the shape being followed (`followStart`); `followTo`: the frame its
+ *   leg ends at; `cache`: synthetic frames rendered ahead of a backward leg (see `followFrame`);
  *   `trackerSettings`: what the tracker was built from (the detector's settings, the page's
  *   over them, the offline options); `reported`: whether the tracker has reported a shape
  */
@@ -85,7 +93,7 @@ async function dispatch(req) {
     case 'step':
       return { result: await step(req.frame, req.bitmap ?? null, req.display !== false), transfer: [] };
     case 'render':
-      return { result: render(req.frame), transfer: [] };
+      return { result: await render(req.frame), transfer: [] };
     case 'setDetector':
       return { result: await setDetector(req.detector, req.detectorOptions), transfer: [] };
     case 'finish':
@@ -118,6 +126,7 @@ function close() {
   session.detector.dispose?.();
   session.tracker.free();
   session.buffer.free();
+  session.feed?.close();
   session.scene?.free();
   session = null;
 }
@@ -145,6 +154,7 @@ async function open(req) {
     height = req.source.height;
   }
   const buffer = new core.FrameBuffer(width, height);
+  const feed = scene && req.source.kind === 'synth' ? startFeed(req.source, scene) : null;
   const detector = createDetector(req.detector, req.detectorOptions);
   await detector.init({ core, width, height });
   if (req.source.kind === 'frames') fps = req.source.fps || fps;
@@ -161,6 +171,7 @@ async function open(req) {
     tracker,
     detector,
     scene,
+    feed,
     canvas: null,
     ctx2d: null,
     follower: null,
@@ -245,6 +256,64 @@ function paint(width, height, bitmap) {
 }
 
 /**
+ * @typedef {{ groundTruth: import('../../pkg/shapetrack.js').Records, detections: import('../../pkg/shapetrack.js').Detections | null }} Synthetic
+ *   a synthetic frame in the frame buffer: its ground truth records and, when asked for, the
+ *   scene's own detections (the caller frees them)
+ */
+
+/**
+ * Starts the scene feeder for the synthetic source `source` (this worker's scene `scene`
+ * tells what the feeder's must be); null where workers cannot start workers.
+ * @param {{ preset?: import('../../pkg/shapetrack.js').ScenePreset, width?: number, height?: number }} source
+ * @param {import('../../pkg/shapetrack.js').SynthScene} scene
+ * @returns {SceneFeed | null}
+ */
+function startFeed(source, scene) {
+  if (typeof Worker === 'undefined') return null;
+  try {
+    const worker = new Worker(new URL('./scene-feeder.js', import.meta.url), { type: 'module', name: 'shapetrack-scene' });
+    const { preset = 'demo', width, height } = source;
+    return new SceneFeed(worker, { preset, width, height }, { width: scene.width, height: scene.height, frames: scene.frames });
+  } catch {
+    return null;
+  }
+}
+
+/**
+ * Puts synthetic frame `n` into the frame buffer: from the scene feeder, or rendered here when
+ * the scene's own detections are wanted (`withDetections`), when there is no feeder, or when
+ * it has failed (this worker then renders every later frame itself; the feeder's error only
+ * costs speed). A frame outside the scene is rendered here, which reports the typed error.
+ * @param {Session} s
+ * @param {number} n
+ * @param {boolean} withDetections
+ * @returns {Promise<Synthetic>}
+ */
+async function syntheticFrame(s, n, withDetections) {
+  const scene = s.scene;
+  if (!scene) throw new Error(`frame ${n}: the source is not synthetic`);
+  const inScene = Number.isInteger(n) && n >= 1 && n <= scene.frames;
+  if (s.feed && !withDetections && inScene) {
+    try {
+      const fed = await s.feed.take(n);
+      pixels(s).set(new Uint8Array(fed.pixels));
+      s.feed.recycle(fed.pixels);
+      return { groundTruth: fed.groundTruth, detections: null };
+    } catch (err) {
+      console.warn(`${err instanceof Error ? err.message : String(err)}; rendering the scene in the tracker worker from now on`);
+      s.feed.close();
+      s.feed = null;
+    }
+  }
+  const sf = scene.render(n, s.buffer);
+  try {
+    return { groundTruth: sf.groundTruth(), detections: withDetections ? sf.detections() : null };
+  } finally {
+    sf.free();
+  }
+}
+
+/**
  * Paints the frame buffer (the pixels wasm just worked on) without copying it first: the
  * ImageData is a view on wasm memory, put straight onto the canvas.
  * @param {Session} s
@@ -268,10 +337,10 @@ function paintBuffer(s) {
 async function step(frame, bitmap, display) {
   const s = need();
   const t0 = performance.now();
-  /** @type {import('../../pkg/shapetrack.js').SceneFrame | null} */
-  let sceneFrame = null;
+  /** @type {Synthetic | null} */
+  let synthetic = null;
   if (s.scene) {
-    sceneFrame = s.scene.render(frame, s.buffer);
+    synthetic = await syntheticFrame(s, frame, s.detector.name === 'scene');
   } else {
     if (!bitmap) throw new Error(`frame ${frame}: no pixels sent`);
     load(s, bitmap);
@@ -284,7 +353,7 @@ async function step(frame, bitmap, display) {
     buffer: s.buffer,
     pixels: () => pixels(s),
     bitmap,
-    scene: sceneFrame ? sceneFrame.detections() : null,
+    scene: synthetic?.detections ?? null,
   });
   const dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(out);
   const t2 = performance.now();
@@ -299,8 +368,7 @@ async function step(frame, bitmap, display) {
   }
   s.reported ||= shapes.length > 0;
   const t3 = performance.now();
-  const groundTruth = sceneFrame ? sceneFrame.groundTruth() : null;
-  sceneFrame?.free();
+  const groundTruth = synthetic?.groundTruth ?? null;
   if (display) {
     if (bitmap) paint(s.width, s.height, bitmap);
     else paintBuffer(s);
@@ -380,12 +448,10 @@ function finish(id) {
  * Renders and paints a synthetic frame (scrubbing), without tracking it.
  * @param {number} frame
  */
-function render(frame) {
+async function render(frame) {
   const s = need();
   if (!s.scene) throw new Error('only the synthetic source renders frames in the worker');
-  const sf = s.scene.render(frame, s.buffer);
-  const groundTruth = sf.groundTruth();
-  sf.free();
+  const { groundTruth } = await syntheticFrame(s, frame, false);
   paintBuffer(s);
   return { groundTruth };
 }
@@ -407,14 +473,13 @@ const BACK_BLOCK = 12;
  * @param {number} n
  * @param {ImageBitmap | null} bitmap
  */
-function followFrame(s, n, bitmap) {
+async function followFrame(s, n, bitmap) {
   if (bitmap) {
     load(s, bitmap);
     bitmap.close();
     return;
   }
-  const scene = s.scene;
-  if (!scene) throw new Error(`frame ${n}: no pixels sent`);
+  if (!s.scene) throw new Error(`frame ${n}: no pixels sent`);
   const cached = s.cache.get(n);
   if (cached) {
     pixels(s).set(cached);
@@ -425,11 +490,11 @@ function followFrame(s, n, bitmap) {
     // Backward: render the block ending at n in order, keep its frames but n.
     const lo = Math.max(1, s.followTo, n - BACK_BLOCK + 1);
     for (let k = lo; k < n; k++) {
-      scene.render(k, s.buffer).free();
+      await syntheticFrame(s, k, false);
       s.cache.set(k, pixels(s).slice());
     }
   }
-  scene.render(n, s.buffer).free();
+  await syntheticFrame(s, n, false);
 }
 
 /**
@@ -445,7 +510,7 @@ async function followStart(frame, to, mask, bitmap) {
   const s = need();
   followEnd();
   s.followTo = to;
-  followFrame(s, frame, bitmap);
+  await followFrame(s, frame, bitmap);
   s.follower = new s.core.Follower(s.buffer, mask);
   return {};
 }
@@ -458,7 +523,7 @@ async function followStart(frame, to, mask, bitmap) {
 async function followStep(frame, bitmap) {
   const s = need();
   if (!s.follower) throw new Error('no follow under way: send "followStart" first');
-  followFrame(s, frame, bitmap);
+  await followFrame(s, frame, bitmap);
   const out = s.follower.step(s.buffer);
   return { step: { frame, ...out } };
 }
