@@ -24,7 +24,7 @@ import { ssdDetector } from './detectors/ssd.js';
  * }} DetectorFrame a frame as a detector receives it: `pixels()` is a fresh RGBA view on wasm
  *   memory (rebuild it after any wasm call: memory growth detaches old views); `bitmap` is the
  *   source image when there is one; `scene` the synthetic scene's own masks when the source is
- *   synthetic
+ *   synthetic and the detector sets `needsScene`
  *
  * @typedef {{ x: number, y: number, width: number, height: number, data: Uint8Array, score?: number, class?: number }} MaskInput
  *   a mask cropped to its box: `data` is `width·height` bytes, non-zero = object
@@ -40,6 +40,7 @@ import { ssdDetector } from './detectors/ssd.js';
  *   tracker?: import('../../pkg/shapetrack.js').TrackerSettings,
  *   classes?: string[],
  *   choice?: () => Choice | null,
+ *   needsScene?: boolean,
  * }} Detector  `tracker` holds the tracker settings this detector's output needs (its scores
  *   may not be confidences); the page's own settings override them. It is read when the
  *   tracker is built and again after each frame: while no shape has been reported the worker
@@ -47,7 +48,9 @@ import { ssdDetector } from './detectors/ssd.js';
  *   `classes` names the class ids the detector puts on its detections (index = id; '' for ids
  *   it never reports), once `init` is done. `warmup` says how far a detector that learns the
  *   scene first (a background model) has got: the page says so meanwhile. `choice`: what a
- *   detector that picks another (the automatic one) picked, once it has
+ *   detector that picks another (the automatic one) picked, once it has. `needsScene`: `detect`
+ *   reads `frame.scene`, which lives in the tracker worker's memory, so that worker renders the
+ *   synthetic frames itself instead of taking them from the scene feeder
  *
  * @typedef {{ seen: number, total: number, what?: 'background' | 'moving' | 'judge' }} Warmup
  *   `seen` of `total` frames learnt; `what` learns: a static background (the default), the
@@ -135,6 +138,7 @@ function backgroundSubtractor(options) {
 function sceneMasks() {
   return {
     name: 'scene',
+    needsScene: true,
     // As the background detector's: a label's box is its mask's extent.
     tracker: { preset: 'masks', report_box: 'detection' },
     init() {},

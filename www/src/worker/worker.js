@@ -7,9 +7,9 @@
 // the page only draws the overlay and no frame is copied back and forth.
 //
 // The synthetic scene's frames are rendered ahead by a second worker, the scene feeder
-// (./feed.js), on another core; this worker renders them itself only for the "scene masks"
-// detector (which needs the scene's own detections, in this worker's memory) or when the
-// feeder is unavailable.
+// (./feed.js), on another core; this worker renders them itself only for a detector that
+// reads the scene's own detections (`needsScene`, the "scene masks" one: they live in this
+// worker's memory) or when the feeder is unavailable.
 
 import { loadCore } from '../lib/core.js';
 import { createDetector } from './detectors.js';
@@ -340,7 +340,7 @@ async function step(frame, bitmap, display) {
   /** @type {Synthetic | null} */
   let synthetic = null;
   if (s.scene) {
-    synthetic = await syntheticFrame(s, frame, s.detector.name === 'scene');
+    synthetic = await syntheticFrame(s, frame, s.detector.needsScene === true);
   } else {
     if (!bitmap) throw new Error(`frame ${frame}: no pixels sent`);
     load(s, bitmap);
