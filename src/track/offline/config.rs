@@ -116,6 +116,38 @@ impl Default for RelinkConfig {
     }
 }
 
+/// The offline boxes: each track's detections smoothed with the whole track known, as far as
+/// the sequence shows smoothing helps (see [`super::smooth`]).
+#[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SmoothConfig {
+    /// Smooth the boxes. Default true.
+    pub enabled: bool,
+    /// A detection whose left-out residual is beyond this many robust standard deviations is
+    /// down-weighted (Huber). Default 2.5.
+    pub huber: f64,
+    /// Times the Huber weights are re-fitted (0: plain least squares). Default 2.
+    pub reweight: u32,
+    /// A coordinate is smoothed only when its best smoother's left-out error is at most this
+    /// share of the lightest smoother's (the detections are kept otherwise). Default 0.8.
+    pub min_gain: f64,
+    /// Shortest run of consecutive observed frames smoothed (at least 3). Default 3.
+    pub min_run: u32,
+}
+
+impl Default for SmoothConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            huber: 2.5,
+            reweight: 2,
+            min_gain: 0.8,
+            min_run: 3,
+        }
+    }
+}
+
 /// Gap filling: shapes invented between two observed shapes of one identity.
 #[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -221,6 +253,8 @@ pub struct OfflineConfig {
     pub relink: RelinkConfig,
     /// Gap filling.
     pub fill: FillConfig,
+    /// The boxes of observed shapes, smoothed over each track.
+    pub smooth: SmoothConfig,
     /// Appearance snapshots.
     #[cfg_attr(target_arch = "wasm32", tsify(type = "SnapshotConfig"))]
     pub appearance: AppearanceConfig,
@@ -247,6 +281,7 @@ impl Default for OfflineConfig {
             online: Config::default(),
             relink: RelinkConfig::default(),
             fill: FillConfig::default(),
+            smooth: SmoothConfig::default(),
             appearance: AppearanceConfig::default(),
             min_track_seconds: 0.0,
         }
@@ -274,6 +309,18 @@ impl OfflineConfig {
     /// Checks every value is finite and in range (the online part included).
     pub fn validate(&self) -> Result<(), OfflineError> {
         self.online.validate()?;
+        let m = &self.smooth;
+        let v = m.huber;
+        check("smooth.huber", v, v > 0.0, "must be > 0")?;
+        let v = m.min_gain;
+        check(
+            "smooth.min_gain",
+            v,
+            v > 0.0 && v <= 1.0,
+            "must be in (0, 1]",
+        )?;
+        let v = m.reweight as f64;
+        check("smooth.reweight", v, v <= 10.0, "must be ≤ 10")?;
         let r = &self.relink;
         let v = r.max_gap_seconds;
         check("relink.max_gap_seconds", v, v >= 0.0, "must be ≥ 0")?;

@@ -268,6 +268,7 @@ impl RleHistory {
     /// were shown) except where an observation of the joined identity covers their frame,
     /// and the shapes the pass filled in are added where nothing was shown. Returns the added
     /// shapes (masks encoded for `image_size`); the history ends sorted by (frame, id).
+    /// Observed shapes take the pass's boxes (smoothed over their track, [`super::smooth`]).
     ///
     /// This differs from [`OfflineResult::shapes`], which also drops coasted shapes a fill
     /// replaces or that trail an identity's last observation: a page does not take back what
@@ -282,6 +283,20 @@ impl RleHistory {
         for k in &mut self.shapes {
             if let Some(&root) = map.get(&k.shape.id) {
                 k.shape.id = root;
+            }
+        }
+        // Observed shapes take the offline pass's boxes (smoothed over their whole track).
+        // `result.shapes` is sorted by (frame, id).
+        let observed = |s: &&crate::frame::TrackedShape| !s.interpolated;
+        let boxes: Vec<_> = result.shapes.iter().filter(observed).collect();
+        for k in self.shapes.iter_mut().filter(|k| !k.shape.interpolated) {
+            let key = (k.shape.frame, k.shape.id);
+            if let Ok(i) = boxes.binary_search_by_key(&key, |s| (s.frame, s.id)) {
+                let b = boxes[i].bbox;
+                k.shape.bbox = b;
+                if k.packed.is_none() {
+                    k.shape.centroid = b.center();
+                }
             }
         }
         // A join may be made over a slave's coasted tail (the pass ignores coasted shapes):

@@ -65,10 +65,11 @@ pub mod config;
 pub mod fill;
 pub mod history;
 pub mod relink;
+pub mod smooth;
 
 pub use appearance::{Snapshot, Snapshots};
 pub use config::{
-    AppearanceConfig, FillConfig, JoinSolver, OfflineConfig, RelinkConfig, Trajectory,
+    AppearanceConfig, FillConfig, JoinSolver, OfflineConfig, RelinkConfig, SmoothConfig, Trajectory,
 };
 pub use history::{History, KeptMasks, OfflineInput, RleHistory, RleShape};
 pub use relink::{fit_motion, rollout_backward, rollout_forward, EndState, Join};
@@ -76,7 +77,7 @@ pub use relink::{fit_motion, rollout_backward, rollout_forward, EndState, Join};
 use super::{TrackError, Tracker};
 use crate::assign::AssignError;
 use crate::features::sift::SiftError;
-use crate::frame::{Detection, Frame, TrackedShape};
+use crate::frame::{BBox, Detection, Frame, TrackedShape};
 use crate::motion::MotionError;
 use appearance::FeatureCache;
 use serde::{Deserialize, Serialize};
@@ -259,6 +260,25 @@ pub fn relink_input(
     seq: &SequenceInfo,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<OfflineResult, OfflineError> {
+    relink_measured(input, None, snapshots, config, seq, progress)
+}
+
+/// The detection boxes of the online pass's shapes, as ((id, frame), box) sorted by key: what
+/// the offline smoother measures ([`smooth`]), where a shape reports a box the online tracker
+/// smoothed. (A sorted list rather than a map: it is looked up once per shape, and a new map
+/// type costs the browser build more code than the smoother itself.)
+type DetectionBoxes = Vec<((u64, u32), BBox)>;
+
+/// [`relink_input`] with each shape's detection box where known (`measured`; a shape without
+/// one is measured by its own box).
+fn relink_measured(
+    input: OfflineInput,
+    measured: Option<&DetectionBoxes>,
+    snapshots: Option<&Snapshots>,
+    config: &OfflineConfig,
+    seq: &SequenceInfo,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<OfflineResult, OfflineError> {
     let OfflineInput { shapes, mask_areas } = input;
     config.validate()?;
     check_fps(seq.fps)?;
@@ -309,7 +329,19 @@ pub fn relink_input(
             areas.push(a);
         }
     }
-    let shapes = observed;
+    let mut shapes = observed;
+    // Boxes smoothed over each whole track before anything reads them (joins fit motion to
+    // them, fills interpolate between them).
+    let boxes: Vec<Option<BBox>> = shapes
+        .iter()
+        .map(|s| {
+            let m = measured?;
+            let k = m.binary_search_by_key(&(s.id, s.frame), |e| e.0).ok()?;
+            Some(m[k].1)
+        })
+        .collect();
+    let is_mask: Vec<bool> = areas.iter().map(Option::is_some).collect();
+    smooth::smooth_boxes(&mut shapes, &boxes, &is_mask, &config.smooth);
     let pieces = relink::pieces(&shapes);
     let use_appearance = config.appearance.enabled && snapshots.is_some_and(|s| !s.is_empty());
     let mut cache = match snapshots {
@@ -416,6 +448,9 @@ pub struct OfflineTracker<H: History = Vec<TrackedShape>> {
     tracker: Tracker,
     shapes: H,
     snapshots: Snapshots,
+    /// The detection each online shape of the current frame was matched to (its box), kept
+    /// for the offline smoother when [`SmoothConfig::enabled`].
+    detections: DetectionBoxes,
 }
 
 impl<H: History> std::fmt::Debug for OfflineTracker<H> {
@@ -464,6 +499,7 @@ impl<H: History> OfflineTracker<H> {
             tracker,
             shapes: H::default(),
             snapshots: Snapshots::new(),
+            detections: DetectionBoxes::new(),
         })
     }
 
@@ -503,6 +539,16 @@ impl<H: History> OfflineTracker<H> {
                 self.snapshots.record(f, s, self.config.appearance.max_side);
             }
             self.snapshots.end_frame();
+        }
+        if self.config.smooth.enabled {
+            // A shape of this frame knows its detection; shapes a confirmation brings from
+            // earlier frames report their detection's box anyway (a track's first matches are
+            // never smoothed online).
+            for s in out.iter().filter(|s| s.frame == now && !s.interpolated) {
+                if let Some(d) = s.det_index.and_then(|i| detections.get(i)) {
+                    self.detections.push(((s.id, s.frame), d.bbox));
+                }
+            }
         }
         let start = self.shapes.items().len();
         for s in out {
@@ -552,7 +598,10 @@ impl<H: History> OfflineTracker<H> {
     pub fn finish(self, mut progress: impl FnMut(Progress)) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
         let input = self.shapes.into_offline_input();
-        relink_input(input, snaps, &self.config, &self.seq, &mut progress)
+        let mut detections = self.detections;
+        detections.sort_unstable_by_key(|e| e.0);
+        let boxes = Some(&detections);
+        relink_measured(input, boxes, snaps, &self.config, &self.seq, &mut progress)
     }
 
     /// The offline stages on everything pushed so far, leaving the tracker as it is: a front
@@ -563,7 +612,10 @@ impl<H: History> OfflineTracker<H> {
     ) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
         let input = self.shapes.offline_input();
-        relink_input(input, snaps, &self.config, &self.seq, &mut progress)
+        let mut detections = self.detections.clone();
+        detections.sort_unstable_by_key(|e| e.0);
+        let boxes = Some(&detections);
+        relink_measured(input, boxes, snaps, &self.config, &self.seq, &mut progress)
     }
 }
 
@@ -577,7 +629,10 @@ impl OfflineTracker<RleHistory> {
     ) -> Result<(OfflineResult, Vec<Option<crate::io::PackedRle>>), OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
         let (input, kept) = self.shapes.into_parts();
-        let result = relink_input(input, snaps, &self.config, &self.seq, &mut progress)?;
+        let mut detections = self.detections;
+        detections.sort_unstable_by_key(|e| e.0);
+        let boxes = Some(&detections);
+        let result = relink_measured(input, boxes, snaps, &self.config, &self.seq, &mut progress)?;
         let masks = kept.resolve(&result, self.seq.image_size);
         Ok((result, masks))
     }
