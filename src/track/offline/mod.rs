@@ -365,7 +365,6 @@ fn relink_measured(
     };
     let map = result.id_map();
     let origin: Vec<u64> = shapes.iter().map(|s| s.id).collect();
-    let mut shapes = shapes;
     for s in &mut shapes {
         if let Some(&root) = map.get(&s.id) {
             s.id = root;
