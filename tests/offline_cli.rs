@@ -122,12 +122,12 @@ fn offline_box_mode_writes_every_format_and_keeps_the_interpolated_flag() {
         res.len()
     );
 
-    // An offline config changes the behaviour: no fill, no joins, coasted tails kept = the
-    // online output.
+    // An offline config changes the behaviour: no fill, no joins, no smoothing, coasted tails
+    // kept = the online output.
     let cfg = dir.join("offline_config.json");
     std::fs::write(
         &cfg,
-        r#"{"relink": {"max_gap_seconds": 0}, "fill": {"max_gap": 0, "coasted_tails": true}}"#,
+        r#"{"relink": {"max_gap_seconds": 0}, "fill": {"max_gap": 0, "coasted_tails": true}, "smooth": {"enabled": false}}"#,
     )
     .unwrap();
     let plain = dir.join("plain.txt");

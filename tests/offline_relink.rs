@@ -104,6 +104,9 @@ fn broken_track_is_rejoined_and_its_gap_filled() {
     shapes.extend(track(8, 53..=90, pos));
     let input = shapes.clone();
     let mut config = OfflineConfig::default();
+    // The relinker's contract on exact tracks: boxes as given (the box smoother is tested in
+    // `track::offline::smooth`).
+    config.smooth.enabled = false;
     config.fill.max_gap = 12;
     let out = run(shapes, &config, 25.0);
 
@@ -438,6 +441,9 @@ proptest! {
             shapes.extend((1..=coast).map(|k| coasted(id, f + k, c)));
         }
         let mut config = OfflineConfig::default();
+    // The relinker's contract on exact tracks: boxes as given (the box smoother is tested in
+    // `track::offline::smooth`).
+    config.smooth.enabled = false;
         config.fill.max_gap = 20;
         if greedy {
             config.relink.solver = JoinSolver::Greedy;
@@ -501,7 +507,10 @@ fn coasted_shapes_inside_a_track_are_replaced_by_the_fill() {
     let mut shapes = track(1, 1..=20, pos);
     shapes.extend((21..=25).map(|f| coasted(1, f, pos(f64::from(f)) + Point::new(0.0, 30.0))));
     shapes.extend(track(1, 26..=40, pos));
-    let out = run(shapes, &OfflineConfig::default(), 25.0);
+    // Exact boxes, as given: the box smoother is tested in `track::offline::smooth`.
+    let mut config = OfflineConfig::default();
+    config.smooth.enabled = false;
+    let out = run(shapes, &config, 25.0);
     assert_eq!(out.shapes.len(), 40);
     assert_eq!((out.filled, out.coasted_dropped), (5, 5));
     for f in 21..=25u32 {
@@ -546,6 +555,9 @@ fn coasted_tails_are_dropped_unless_asked_for() {
     assert_eq!(out.shapes.iter().map(|s| s.frame).max(), Some(30));
     assert_eq!((out.filled, out.coasted_dropped), (0, 6));
     let mut config = OfflineConfig::default();
+    // The relinker's contract on exact tracks: boxes as given (the box smoother is tested in
+    // `track::offline::smooth`).
+    config.smooth.enabled = false;
     config.fill.coasted_tails = true;
     let kept = run(shapes, &config, 25.0);
     assert_eq!(kept.shapes.iter().map(|s| s.frame).max(), Some(36));

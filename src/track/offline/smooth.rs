@@ -37,6 +37,9 @@ use std::collections::BTreeMap;
 /// Sizes below this count as this (pixels), so no variance is ever zero.
 const MIN_SIZE: f64 = 1.0;
 
+/// Left-out error (share of the box size) below which detections count as exact.
+const EXACT: f64 = 1e-3;
+
 /// Scale from the median absolute deviation to a normal standard deviation.
 const MAD_TO_SIGMA: f64 = 1.4826;
 
@@ -307,9 +310,14 @@ fn choose(runs: &mut [Run], config: &SmoothConfig) -> [Option<usize>; 4] {
         sigma = Some(sg);
     }
     let last = RATIOS.len() - 1;
+    let n: usize = runs.iter().map(|r| r.index.len()).sum();
     std::array::from_fn(|k| {
         let gain = cv[k][best[k]] <= config.min_gain * cv[k][last];
-        gain.then_some(best[k])
+        // Detections that a path through their neighbours predicts to within a thousandth of
+        // their size (exact ones) have nothing to smooth; the bank's comparison there is
+        // rounding noise.
+        let noisy = cv[k][last] > EXACT * EXACT * n as f64;
+        (gain && noisy).then_some(best[k])
     })
 }
 
