@@ -75,15 +75,16 @@ const MIN_SIZE: f64 = 1.0;
 
 /// One coordinate's local-linear-trend filter: position and velocity per frame.
 #[derive(Debug, Clone, Copy)]
-struct Trend {
-    x: [f64; 2],
+pub(crate) struct Trend {
+    /// Position and velocity.
+    pub(crate) x: [f64; 2],
     /// Covariance `[p00, p01, p11]`.
-    p: [f64; 3],
+    pub(crate) p: [f64; 3],
 }
 
 impl Trend {
     /// At `z` with a velocity prior of one size `s` per frame (unknown; two matches fix it).
-    fn new(z: f64, s: f64) -> Self {
+    pub(crate) fn new(z: f64, s: f64) -> Self {
         Trend {
             x: [z, 0.0],
             p: [s * s, 0.0, s * s],
@@ -91,7 +92,7 @@ impl Trend {
     }
 
     /// One frame ahead under white-noise acceleration of variance `q`.
-    fn predict(&mut self, q: f64) {
+    pub(crate) fn predict(&mut self, q: f64) {
         let [p00, p01, p11] = self.p;
         self.x[0] += self.x[1];
         self.p = [
@@ -102,7 +103,7 @@ impl Trend {
     }
 
     /// Corrects with `z` of measurement variance `r`.
-    fn update(&mut self, z: f64, r: f64) {
+    pub(crate) fn update(&mut self, z: f64, r: f64) {
         let [p00, p01, p11] = self.p;
         let s = p00 + r;
         let nu = z - self.x[0];

@@ -31,7 +31,7 @@
 
 use super::config::SmoothConfig;
 use crate::frame::{BBox, TrackedShape};
-use crate::track::estimate::RATIOS;
+use crate::track::estimate::{Trend, RATIOS};
 use std::collections::BTreeMap;
 
 /// Sizes below this count as this (pixels), so no variance is ever zero.
@@ -63,29 +63,18 @@ fn rts(z: &[f64], s: &[f64], infl: &[f64], ratio: f64, x_out: &mut Vec<f64>, h_o
     if n == 0 {
         return;
     }
-    // Predicted and filtered state (position, velocity) and covariance [p00, p01, p11].
+    // The forward pass is the online bank's filter (`Trend`); the predicted and filtered
+    // states are kept for the backward pass.
     let mut pred = Vec::with_capacity(n);
     let mut filt = Vec::with_capacity(n);
-    let mut x = [z[0], 0.0];
-    let mut p = [s[0] * s[0], 0.0, s[0] * s[0]];
+    let mut f = Trend::new(z[0], s[0]);
     for t in 0..n {
         if t > 0 {
-            let q = ratio * s[t - 1] * s[t - 1];
-            x = [x[0] + x[1], x[1]];
-            p = [
-                p[0] + 2.0 * p[1] + p[2] + q / 4.0,
-                p[1] + p[2] + q / 2.0,
-                p[2] + q,
-            ];
+            f.predict(ratio * s[t - 1] * s[t - 1]);
         }
-        pred.push((x, p));
-        let r = s[t] * s[t] * infl[t];
-        let sv = p[0] + r;
-        let (k0, k1) = (p[0] / sv, p[1] / sv);
-        let nu = z[t] - x[0];
-        x = [x[0] + k0 * nu, x[1] + k1 * nu];
-        p = [(1.0 - k0) * p[0], (1.0 - k0) * p[1], p[2] - k1 * p[1]];
-        filt.push((x, p));
+        pred.push((f.x, f.p));
+        f.update(z[t], s[t] * s[t] * infl[t]);
+        filt.push((f.x, f.p));
     }
     let mut sm = filt.clone();
     for t in (0..n - 1).rev() {
