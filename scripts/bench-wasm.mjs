@@ -6,14 +6,25 @@
 // and its phases inside wasm. Rendering is not timed; the call into
 // wasm and the shapes coming back to JS are.
 //
-//   node scripts/bench-wasm.mjs --scene default
+//   node scripts/bench-wasm.mjs --scene default [--pkg DIR]
+//
+// `--pkg`: another build of the bindings than www/pkg, e.g. the one with function names for
+// profilers (`node scripts/build-wasm.mjs --profiling` writes target/pkg-profiling).
 
 import { readFileSync } from 'node:fs';
-import * as st from '../www/pkg/shapetrack.js';
+import { resolve } from 'node:path';
+import { fileURLToPath, pathToFileURL } from 'node:url';
 
-const i = process.argv.indexOf('--scene');
-const name = /** @type {st.ScenePreset} */ (i >= 0 ? process.argv[i + 1] : 'default');
-st.initSync({ module: readFileSync(new URL('../www/pkg/shapetrack_bg.wasm', import.meta.url)) });
+/** @param {string} flag @param {string} fallback */
+const arg = (flag, fallback) => {
+  const i = process.argv.indexOf(flag);
+  return i >= 0 && i + 1 < process.argv.length ? process.argv[i + 1] : fallback;
+};
+const PKG = resolve(arg('--pkg', fileURLToPath(new URL('../www/pkg', import.meta.url))));
+/** @type {typeof import('../www/pkg/shapetrack.js')} */
+const st = await import(pathToFileURL(resolve(PKG, 'shapetrack.js')).href);
+const name = /** @type {import('../www/pkg/shapetrack.js').ScenePreset} */ (arg('--scene', 'default'));
+st.initSync({ module: readFileSync(resolve(PKG, 'shapetrack_bg.wasm')) });
 const scene = new st.SynthScene(name);
 const buf = new st.FrameBuffer(scene.width, scene.height);
 // Passes over the scene, each with a new tracker: V8 first runs wasm from its baseline compiler
@@ -26,7 +37,7 @@ const buf = new st.FrameBuffer(scene.width, scene.height);
 // many passes; the first pass is reported beside it.
 const MIN_PASSES = 3;
 const MIN_MS = 1000;
-/** @returns {{ ms: number, detections: number, tracker: st.Tracker }} */
+/** @returns {{ ms: number, detections: number, tracker: import('../www/pkg/shapetrack.js').Tracker }} */
 function pass() {
   const tracker = new st.Tracker({ preset: 'masks' });
   let ms = 0;
