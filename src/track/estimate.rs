@@ -115,13 +115,13 @@ impl Trend {
 }
 
 /// The coordinates of a box: centre x, centre y, width, height.
-fn coords(b: &BBox) -> [f64; 4] {
+pub(crate) fn coords(b: &BBox) -> [f64; 4] {
     let c = b.center();
     [c.x, c.y, b.w, b.h]
 }
 
 /// The size scale of each coordinate: width for centre x and width, height for the others.
-fn scales(w: f64, h: f64) -> [f64; 4] {
+pub(crate) fn scales(w: f64, h: f64) -> [f64; 4] {
     let (w, h) = (w.max(MIN_SIZE), h.max(MIN_SIZE));
     [w, h, w, h]
 }

@@ -260,20 +260,27 @@ pub fn relink_input(
     seq: &SequenceInfo,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<OfflineResult, OfflineError> {
-    relink_measured(input, None, snapshots, config, seq, progress)
+    relink_measured(
+        input,
+        DetectionBoxes::new(),
+        snapshots,
+        config,
+        seq,
+        progress,
+    )
 }
 
-/// The detection boxes of the online pass's shapes, as ((id, frame), box) sorted by key: what
-/// the offline smoother measures ([`smooth`]), where a shape reports a box the online tracker
+/// The detection boxes of the online pass's shapes, as ((id, frame), box): what the offline
+/// smoother measures ([`smooth`]), where a shape reports a box the online tracker
 /// smoothed. (A sorted list rather than a map: it is looked up once per shape, and a new map
 /// type costs the browser build more code than the smoother itself.)
 type DetectionBoxes = Vec<((u64, u32), BBox)>;
 
-/// [`relink_input`] with each shape's detection box where known (`measured`; a shape without
-/// one is measured by its own box).
+/// [`relink_input`] with each shape's detection box where known (`measured`, in any order; a
+/// shape without one is measured by its own box).
 fn relink_measured(
     input: OfflineInput,
-    measured: Option<&DetectionBoxes>,
+    mut measured: DetectionBoxes,
     snapshots: Option<&Snapshots>,
     config: &OfflineConfig,
     seq: &SequenceInfo,
@@ -332,12 +339,14 @@ fn relink_measured(
     let mut shapes = observed;
     // Boxes smoothed over each whole track before anything reads them (joins fit motion to
     // them, fills interpolate between them).
+    measured.sort_unstable_by_key(|e| e.0);
     let boxes: Vec<Option<BBox>> = shapes
         .iter()
         .map(|s| {
-            let m = measured?;
-            let k = m.binary_search_by_key(&(s.id, s.frame), |e| e.0).ok()?;
-            Some(m[k].1)
+            let k = measured
+                .binary_search_by_key(&(s.id, s.frame), |e| e.0)
+                .ok()?;
+            Some(measured[k].1)
         })
         .collect();
     let is_mask: Vec<bool> = areas.iter().map(Option::is_some).collect();
@@ -447,8 +456,8 @@ pub struct OfflineTracker<H: History = Vec<TrackedShape>> {
     tracker: Tracker,
     shapes: H,
     snapshots: Snapshots,
-    /// The detection each online shape of the current frame was matched to (its box), kept
-    /// for the offline smoother when [`SmoothConfig::enabled`].
+    /// The detection each observed online shape was matched to (its box), kept for the
+    /// offline smoother when [`SmoothConfig::enabled`].
     detections: DetectionBoxes,
 }
 
@@ -597,9 +606,7 @@ impl<H: History> OfflineTracker<H> {
     pub fn finish(self, mut progress: impl FnMut(Progress)) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
         let input = self.shapes.into_offline_input();
-        let mut detections = self.detections;
-        detections.sort_unstable_by_key(|e| e.0);
-        let boxes = Some(&detections);
+        let boxes = self.detections;
         relink_measured(input, boxes, snaps, &self.config, &self.seq, &mut progress)
     }
 
@@ -611,9 +618,7 @@ impl<H: History> OfflineTracker<H> {
     ) -> Result<OfflineResult, OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
         let input = self.shapes.offline_input();
-        let mut detections = self.detections.clone();
-        detections.sort_unstable_by_key(|e| e.0);
-        let boxes = Some(&detections);
+        let boxes = self.detections.clone();
         relink_measured(input, boxes, snaps, &self.config, &self.seq, &mut progress)
     }
 }
@@ -628,9 +633,7 @@ impl OfflineTracker<RleHistory> {
     ) -> Result<(OfflineResult, Vec<Option<crate::io::PackedRle>>), OfflineError> {
         let snaps = (!self.snapshots.is_empty()).then_some(&self.snapshots);
         let (input, kept) = self.shapes.into_parts();
-        let mut detections = self.detections;
-        detections.sort_unstable_by_key(|e| e.0);
-        let boxes = Some(&detections);
+        let boxes = self.detections;
         let result = relink_measured(input, boxes, snaps, &self.config, &self.seq, &mut progress)?;
         let masks = kept.resolve(&result, self.seq.image_size);
         Ok((result, masks))

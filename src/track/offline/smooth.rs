@@ -31,11 +31,8 @@
 
 use super::config::SmoothConfig;
 use crate::frame::{BBox, TrackedShape};
-use crate::track::estimate::{Trend, RATIOS};
+use crate::track::estimate::{coords, scales, Trend, RATIOS};
 use std::collections::BTreeMap;
-
-/// Sizes below this count as this (pixels), so no variance is ever zero.
-const MIN_SIZE: f64 = 1.0;
 
 /// Left-out error (share of the box size) below which detections count as exact.
 const EXACT: f64 = 1e-3;
@@ -194,7 +191,7 @@ pub(super) fn smooth_boxes(
                         &mut x,
                         &mut h,
                     );
-                    c[k] = x.clone();
+                    c[k] = std::mem::take(&mut x);
                 }
                 None => c[k] = run.z[k].clone(),
             }
@@ -217,13 +214,9 @@ fn run_of(index: &[usize], boxes: &[BBox]) -> Run {
     let mut z: [Vec<f64>; 4] = Default::default();
     let mut s: [Vec<f64>; 4] = Default::default();
     for &i in index {
+        // The online bank's coordinates and size scales (sizes floored at one pixel).
         let b = &boxes[i];
-        let c = b.center();
-        let (w, h) = (b.w.max(MIN_SIZE), b.h.max(MIN_SIZE));
-        for (k, (v, sc)) in [(c.x, w), (c.y, h), (b.w, w), (b.h, h)]
-            .into_iter()
-            .enumerate()
-        {
+        for (k, (v, sc)) in coords(b).into_iter().zip(scales(b.w, b.h)).enumerate() {
             z[k].push(v);
             s[k].push(sc);
         }
