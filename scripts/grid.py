@@ -4,7 +4,7 @@ ours with masks where the cell has masks, each peer}, all on the same detections
 eval and by TrackEval; writes tests/data/quality/grid.md and grid.json.
 
 Usage: scripts/grid.py [--cells GLOB,..] [--datasets D,..] [--peers LIST] [--out DIR]
-                       [--venv DIR] [--bin PATH] [--no-trackeval] [--jobs N]
+                       [--venv DIR] [--bin PATH] [--no-trackeval] [--jobs N] [--from-json FILE]
 
   --cells     only cells whose dataset/model name matches (`*` wildcard, comma-separated)
   --datasets  mot15,sportsmot,bdd,bdd-masks,synth (default: all)
@@ -19,6 +19,8 @@ Usage: scripts/grid.py [--cells GLOB,..] [--datasets D,..] [--peers LIST] [--out
   --rerun-peers  run the peers again even where a cell's detections did not change (by default
               their results are reused: a digest of the detections is kept beside them)
   --write     where to write grid.md/grid.json (default tests/data/quality; `-` for nowhere)
+  --from-json write grid.md (and grid.json) again from a grid.json this script wrote, without
+              running anything: the tables' form changed, the figures did not
 
 Stages: `shapetrack grid prepare` writes each cell in TrackEval's layout with its detections;
 `shapetrack grid run` runs ours; the peers run through ../shared/tools/peers/run_baseline.py
@@ -147,6 +149,126 @@ def fmt_cell(r, best):
     return f"**{s}**" if best else s
 
 
+def render(result):
+    """grid.md's text from a grid.json's content, and the summary counts it states."""
+    ours_scores, peers = result["ours"], result.get("peers") or [
+        p for p in PEERS if any(p in v for v in result["ours"].values())]
+    te = {tuple(k.rsplit("/", 1)): v for k, v in result.get("trackeval", {}).items()}
+    rows, worst = [], {}
+    ours_cols = ["ours-online", "ours-offline", "ours-masks-online", "ours-masks-offline"]
+    summary = {"online_ge_best_hota": 0, "online_ge_sort_hota": 0, "offline_ge_best_hota_idf1": 0,
+               "masks_online_ge_best_hota": 0, "masks_offline_ge_best_hota_idf1": 0,
+               "masks_online_gt_boxes": 0, "masks_offline_gt_boxes": 0, "mask_cells": 0, "cells": 0}
+    by_dataset = {}
+    for name in sorted(ours_scores, key=lambda n: n.replace("/", "__")):
+        s = ours_scores[name]
+        for (cc, tr), v in te.items():
+            if cc == name and tr in s:
+                for k in ("HOTA", "IDF1", "MOTA"):
+                    worst[k] = max(worst.get(k, 0.0), abs(v[k] - s[tr][k]))
+                worst["IDSW"] = max(worst.get("IDSW", 0), abs(v["IDSW"] - s[tr]["IDSW"]))
+        pe = {p: s.get(p) for p in peers if s.get(p)}
+        best_peer = max(pe, key=lambda p: pe[p]["HOTA"]) if pe else None
+        bh = pe[best_peer]["HOTA"] if best_peer else 0.0
+        bi = max((v["IDF1"] for v in pe.values()), default=0.0)
+        on, off = s.get("ours-online"), s.get("ours-offline")
+        summary["cells"] += 1
+        if on and on["HOTA"] >= bh:
+            summary["online_ge_best_hota"] += 1
+        if on and on["HOTA"] >= (pe.get("rf_sort") or {"HOTA": 0})["HOTA"]:
+            summary["online_ge_sort_hota"] += 1
+        if off and off["HOTA"] >= bh and off["IDF1"] >= bi:
+            summary["offline_ge_best_hota_idf1"] += 1
+        mon = s.get("ours-masks-online")
+        if mon:
+            summary["mask_cells"] += 1
+            if mon["HOTA"] >= bh:
+                summary["masks_online_ge_best_hota"] += 1
+            if on and mon["HOTA"] > on["HOTA"]:
+                summary["masks_online_gt_boxes"] += 1
+        moff = s.get("ours-masks-offline")
+        if moff:
+            if moff["HOTA"] >= bh and moff["IDF1"] >= bi:
+                summary["masks_offline_ge_best_hota_idf1"] += 1
+            if off and moff["HOTA"] > off["HOTA"]:
+                summary["masks_offline_gt_boxes"] += 1
+        ds = name.split("/")[0]
+        agg = by_dataset.setdefault(ds, {})
+        for tr, v in s.items():
+            agg.setdefault(tr, []).append(v["HOTA"])
+        rows.append((name, s, best_peer, bh))
+
+    # Issue 9's mask-mode goal is stated per synthetic family (a scenario, over its clean and
+    # ragged masks): the family's mean HOTA with masks and frames against its mean in our box
+    # mode and each peer's.
+    mean = lambda v: sum(v) / len(v)
+    fam = {ds: {t: mean(v) for t, v in agg.items()} for ds, agg in by_dataset.items()
+           if ds.startswith("synth-") and "ours-masks-online" in agg}
+    for mode, box in (("online", "ours-online"), ("offline", "ours-offline")):
+        mk = f"ours-masks-{mode}"
+        summary[f"families_masks_{mode}_gt_boxes"] = sum(1 for m in fam.values() if m[mk] > m[box])
+        summary[f"families_masks_{mode}_gt_peers"] = sum(
+            1 for m in fam.values() if all(m[mk] > m[p] for p in peers if p in m))
+    summary["families"] = len(fam)
+    below = [f"{ds} {mode} ({m[f'ours-masks-{mode}']:.2f} vs {m[box]:.2f})" for ds, m in sorted(fam.items())
+             for mode, box in (("online", "ours-online"), ("offline", "ours-offline"))
+             if m[f"ours-masks-{mode}"] <= m[box]]
+
+    trackers = [t for t in ours_cols + peers if any(t in r[1] for r in rows)]
+    lines = []
+    lines.append("| cell | " + " | ".join(NAMES.get(t, t) for t in trackers) + " | best peer | online − best | online − SORT |")
+    lines.append("|---" * (len(trackers) + 4) + "|")
+    for name, s, bp, bh in rows:
+        best_h = max((v["HOTA"] for v in s.values()), default=None)
+        cells_txt = [fmt_cell(s.get(t), s.get(t) is not None and s[t]["HOTA"] == best_h) for t in trackers]
+        on = s.get("ours-online")
+        d_best = f"{on['HOTA'] - bh:+.1f}" if on and bp else "–"
+        d_sort = f"{on['HOTA'] - s['rf_sort']['HOTA']:+.1f}" if on and s.get("rf_sort") else "–"
+        lines.append(f"| {name} | " + " | ".join(cells_txt) + f" | {NAMES.get(bp, bp)} | {d_best} | {d_sort} |")
+    n = max(summary["cells"], 1)
+    # In the order the stages run (grid.json keeps them sorted by name).
+    order = ["prepare", "ours", "peers", "score", "trackeval"]
+    stages = dict(sorted(result.get("stages_seconds", {}).items(),
+                         key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
+    nf = summary["families"]
+    md = [f"# Robustness grid\n",
+          f"HOTA / IDF1 (our eval; TrackEval agrees: largest difference {json.dumps(worst) if worst else 'not run'}) per cell "
+          f"(dataset/detector model) and tracker, all on the same detections. Bold: best in the row. "
+          f"Made {result['made']} at commit {result['commit']}{' (with uncommitted changes)' if result.get('dirty') else ''} "
+          f"by `{result['command']}` "
+          f"({sum(stages.values()) / 60:.0f} min: " + ", ".join(f"{k} {v:.0f} s" for k, v in stages.items()) + ").\n",
+          f"- ours online ≥ best peer on HOTA: {summary['online_ge_best_hota']} / {n} cells; ≥ SORT: {summary['online_ge_sort_hota']} / {n}",
+          f"- ours offline ≥ best peer on HOTA and IDF1: {summary['offline_ge_best_hota_idf1']} / {n}",
+          f"- ours with masks online ≥ best peer on HOTA: {summary['masks_online_ge_best_hota']} / {summary['mask_cells']} mask cells; "
+          f"offline ≥ best peer on HOTA and IDF1: {summary['masks_offline_ge_best_hota_idf1']} / {summary['mask_cells']}",
+          f"- masks with frames above our own box mode on HOTA: online {summary['masks_online_gt_boxes']} / {summary['mask_cells']}, "
+          f"offline {summary['masks_offline_gt_boxes']} / {summary['mask_cells']} mask cells",
+          f"- synthetic families (mean HOTA over a family's clean and ragged cells), masks with frames above our own box "
+          f"mode: online {summary['families_masks_online_gt_boxes']} / {nf}, offline "
+          f"{summary['families_masks_offline_gt_boxes']} / {nf}; above every peer: online "
+          f"{summary['families_masks_online_gt_peers']} / {nf}, offline {summary['families_masks_offline_gt_peers']} / {nf}"
+          + (f" (not above box mode: {'; '.join(below)})" if below else "") + "\n",
+          "Mean HOTA per dataset:\n",
+          "| dataset | " + " | ".join(NAMES.get(t, t) for t in trackers) + " |",
+          "|---" * (len(trackers) + 1) + "|"]
+    for ds, agg in sorted(by_dataset.items()):
+        md.append(f"| {ds} | " + " | ".join(
+            f"{sum(agg[t]) / len(agg[t]):.1f}" if t in agg else "–" for t in trackers) + " |")
+    md += ["", *lines, ""]
+    return "\n".join(md), summary, worst
+
+
+def write_tables(result, where):
+    """Prints grid.md's text and, unless `where` is `-`, writes grid.md and grid.json there."""
+    text, summary, worst = render(result)
+    result = {**result, "summary": summary, "trackeval_max_difference": worst}
+    print(text)
+    if where != "-":
+        os.makedirs(where, exist_ok=True)
+        open(os.path.join(where, "grid.md"), "w").write(text)
+        json.dump(result, open(os.path.join(where, "grid.json"), "w"), indent=1, sort_keys=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cells", default="")
@@ -161,7 +283,12 @@ def main():
     ap.add_argument("--rerun-peers", action="store_true",
                     help="run the peers even where their results for the same detections exist")
     ap.add_argument("--write", default=os.path.join(REPO, "tests", "data", "quality"))
+    ap.add_argument("--from-json", default=None,
+                    help="write grid.md again from this grid.json (no run): a change of the tables' form")
     a = ap.parse_args()
+    if a.from_json:
+        write_tables(json.load(open(a.from_json)), a.write)
+        return
     t_start = time.time()
     stages = {}
 
@@ -233,97 +360,16 @@ def main():
                 te[futs[f]] = f.result()
         stages["trackeval"] = time.time() - t
 
-    # Table.
-    rows, worst = [], {}
-    ours_cols = ["ours-online", "ours-offline", "ours-masks-online", "ours-masks-offline"]
-    summary = {"online_ge_best_hota": 0, "online_ge_sort_hota": 0, "offline_ge_best_hota_idf1": 0,
-               "masks_online_ge_best_hota": 0, "masks_offline_ge_best_hota_idf1": 0,
-               "masks_online_gt_boxes": 0, "masks_offline_gt_boxes": 0, "mask_cells": 0, "cells": 0}
-    by_dataset = {}
-    for c in cells:
-        name = c.replace("__", "/")
-        s = ours_scores.get(name, {})
-        for (cc, tr), v in te.items():
-            if cc == c and tr in s:
-                for k in ("HOTA", "IDF1", "MOTA"):
-                    worst[k] = max(worst.get(k, 0.0), abs(v[k] - s[tr][k]))
-                worst["IDSW"] = max(worst.get("IDSW", 0), abs(v["IDSW"] - s[tr]["IDSW"]))
-        pe = {p: s.get(p) for p in peers if s.get(p)}
-        best_peer = max(pe, key=lambda p: pe[p]["HOTA"]) if pe else None
-        bh = pe[best_peer]["HOTA"] if best_peer else 0.0
-        bi = max((v["IDF1"] for v in pe.values()), default=0.0)
-        on, off = s.get("ours-online"), s.get("ours-offline")
-        summary["cells"] += 1
-        if on and on["HOTA"] >= bh:
-            summary["online_ge_best_hota"] += 1
-        if on and on["HOTA"] >= (pe.get("rf_sort") or {"HOTA": 0})["HOTA"]:
-            summary["online_ge_sort_hota"] += 1
-        if off and off["HOTA"] >= bh and off["IDF1"] >= bi:
-            summary["offline_ge_best_hota_idf1"] += 1
-        mon = s.get("ours-masks-online")
-        if mon:
-            summary["mask_cells"] += 1
-            if mon["HOTA"] >= bh:
-                summary["masks_online_ge_best_hota"] += 1
-            if on and mon["HOTA"] > on["HOTA"]:
-                summary["masks_online_gt_boxes"] += 1
-        moff = s.get("ours-masks-offline")
-        if moff:
-            if moff["HOTA"] >= bh and moff["IDF1"] >= bi:
-                summary["masks_offline_ge_best_hota_idf1"] += 1
-            if off and moff["HOTA"] > off["HOTA"]:
-                summary["masks_offline_gt_boxes"] += 1
-        ds = name.split("/")[0]
-        agg = by_dataset.setdefault(ds, {})
-        for tr, v in s.items():
-            agg.setdefault(tr, []).append(v["HOTA"])
-        rows.append((name, s, best_peer, bh))
-
-    trackers = [t for t in ours_cols + peers if any(t in r[1] for r in rows)]
-    lines = []
-    lines.append("| cell | " + " | ".join(NAMES.get(t, t) for t in trackers) + " | best peer | online − best | online − SORT |")
-    lines.append("|---" * (len(trackers) + 4) + "|")
-    for name, s, bp, bh in rows:
-        best_h = max((v["HOTA"] for v in s.values()), default=None)
-        cells_txt = [fmt_cell(s.get(t), s.get(t) is not None and s[t]["HOTA"] == best_h) for t in trackers]
-        on = s.get("ours-online")
-        d_best = f"{on['HOTA'] - bh:+.1f}" if on and bp else "–"
-        d_sort = f"{on['HOTA'] - s['rf_sort']['HOTA']:+.1f}" if on and s.get("rf_sort") else "–"
-        lines.append(f"| {name} | " + " | ".join(cells_txt) + f" | {NAMES.get(bp, bp)} | {d_best} | {d_sort} |")
-    n = max(summary["cells"], 1)
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=REPO).stdout.strip()
     dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True, cwd=REPO).stdout.strip()
     cmd = "python3 scripts/grid.py" + (f" --cells {a.cells}" if a.cells else "") + (f" --datasets {a.datasets}" if a.datasets else "")
-    md = [f"# Robustness grid\n",
-          f"HOTA / IDF1 (our eval; TrackEval agrees: largest difference {json.dumps(worst) if worst else 'not run'}) per cell "
-          f"(dataset/detector model) and tracker, all on the same detections. Bold: best in the row. "
-          f"Made {now} at commit {commit}{' (with uncommitted changes)' if dirty else ''} by `{cmd}` "
-          f"({sum(stages.values()) / 60:.0f} min: " + ", ".join(f"{k} {v:.0f} s" for k, v in stages.items()) + ").\n",
-          f"- ours online ≥ best peer on HOTA: {summary['online_ge_best_hota']} / {n} cells; ≥ SORT: {summary['online_ge_sort_hota']} / {n}",
-          f"- ours offline ≥ best peer on HOTA and IDF1: {summary['offline_ge_best_hota_idf1']} / {n}",
-          f"- ours with masks online ≥ best peer on HOTA: {summary['masks_online_ge_best_hota']} / {summary['mask_cells']} mask cells; "
-          f"offline ≥ best peer on HOTA and IDF1: {summary['masks_offline_ge_best_hota_idf1']} / {summary['mask_cells']}",
-          f"- masks with frames above our own box mode on HOTA: online {summary['masks_online_gt_boxes']} / {summary['mask_cells']}, "
-          f"offline {summary['masks_offline_gt_boxes']} / {summary['mask_cells']}\n",
-          "Mean HOTA per dataset:\n",
-          "| dataset | " + " | ".join(NAMES.get(t, t) for t in trackers) + " |",
-          "|---" * (len(trackers) + 1) + "|"]
-    for ds, agg in sorted(by_dataset.items()):
-        md.append(f"| {ds} | " + " | ".join(
-            f"{sum(agg[t]) / len(agg[t]):.1f}" if t in agg else "–" for t in trackers) + " |")
-    md += ["", *lines, ""]
     fps = {f"{c}/{p}": v for (p, c), v in peer_fps.items()}
     fps.update({f"{c}/{t}": v for (c, t), v in ours_fps.items()})
     result = {"made": now, "commit": commit, "dirty": bool(dirty), "command": cmd, "stages_seconds": stages,
-              "summary": summary, "trackeval_max_difference": worst, "ours": ours_scores,
+              "peers": peers, "ours": {c.replace("__", "/"): ours_scores.get(c.replace("__", "/"), {}) for c in cells},
               "trackeval": {f"{c.replace('__', '/')}/{t}": v for (c, t), v in te.items()}, "fps": fps}
-    text = "\n".join(md)
-    print(text)
-    if a.write != "-":
-        os.makedirs(a.write, exist_ok=True)
-        open(os.path.join(a.write, "grid.md"), "w").write(text)
-        json.dump(result, open(os.path.join(a.write, "grid.json"), "w"), indent=1, sort_keys=True)
+    write_tables(result, a.write)
     print(f"done in {(time.time() - t_start) / 60:.1f} min", file=sys.stderr)
 
 
