@@ -14,6 +14,9 @@
 //! - **Masks with frames** on one scene of three synthetic families (deformation, occluders,
 //!   a look-alike crowd) under the `masks-clean` or `masks-ragged` detector model: the mask
 //!   preset, and the box defaults on the same detections' boxes.
+//! - **Masks without frames**: BDD100K's real model masks (5 fps), the mask preset and the
+//!   box defaults, as the grid's `bdd-masks/real` cell (the lost-track rules without frames,
+//!   `Config::without_frames`, are checked nowhere else on real data).
 //!
 //! Independently of the baseline, issue 9's bars are asserted: MOT15 online HOTA ≥ 36.7 (above
 //! SORT's 36.64 and ByteTrack's 36.57 on the same detections), and
@@ -125,7 +128,7 @@ fn regressions(name: &str, now: &Scores, base: &Scores) -> Vec<String> {
 #[test]
 fn quality_gate() {
     let shared = datasets::shared_dir();
-    let mut sets = grid::load(&["mot15", "sportsmot", "bdd"], &shared).unwrap();
+    let mut sets = grid::load(&["mot15", "sportsmot", "bdd", "bdd-masks"], &shared).unwrap();
     for (family, model) in [
         (Family::Deform, "masks-ragged"),
         (Family::Occluders, "masks-clean"),
@@ -150,6 +153,12 @@ fn quality_gate() {
         let data = cell(&sets, dataset, model, take);
         current.insert(format!("{dataset}/{model}"), pair(&data, Input::Boxes));
     }
+    let real_masks = cell(&sets, "bdd-masks", "real", usize::MAX);
+    current.insert("bdd-masks/real".into(), pair(&real_masks, Input::Boxes));
+    current.insert(
+        "bdd-masks/real+masks".into(),
+        pair(&real_masks, Input::Masks),
+    );
     let mut mask_cells = Vec::new();
     for d in sets.iter().filter(|d| d.name.contains('@')) {
         let (ds, model) = d.name.split_once('@').unwrap();

@@ -474,3 +474,37 @@ fn a_jittering_masks_box_is_smoothed_and_its_mask_kept() {
         assert_eq!(s.bbox, s.mask.as_ref().unwrap().bbox(), "frame {}", s.frame);
     }
 }
+
+/// Without frames there is no appearance to re-identify a long-lost shape by: the mask preset
+/// then keeps a lost track for the defaults' horizon instead of its own 60 frames, and offers
+/// lost tracks to the main association as box mode does (`Config::without_frames`).
+#[test]
+fn without_frames_lost_tracks_follow_the_box_rules() {
+    let config = Config::masks();
+    let frameless = config.without_frames();
+    assert!(config.lost_reid_only && !frameless.lost_reid_only);
+    let horizon = Config::default().max_lost;
+    assert_eq!(frameless.max_lost, horizon);
+    assert!(horizon < config.max_lost);
+    // Box mode's defaults are already their own rules without frames.
+    assert_eq!(Config::default().without_frames(), Config::default());
+    // A still square seen for 20 frames, then `misses` empty frames: tracks left.
+    let (w, h) = (160u32, 120u32);
+    let img = image(w, h);
+    let left_after = |with_frames: bool, misses: u32| {
+        let frame = Frame::rgb(&img, w, h).unwrap();
+        let f = with_frames.then_some(&frame);
+        let mut t = Tracker::new(config.clone()).unwrap();
+        for _ in 0..20 {
+            t.update(f, &[square(60, 40, 30)]).unwrap();
+        }
+        for _ in 0..misses {
+            t.update(f, &[]).unwrap();
+        }
+        t.tracks().len()
+    };
+    assert_eq!(left_after(false, horizon), 1);
+    assert_eq!(left_after(false, horizon + 1), 0);
+    assert_eq!(left_after(true, horizon + 1), 1);
+    assert_eq!(left_after(true, config.max_lost + 1), 0);
+}

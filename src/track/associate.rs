@@ -385,6 +385,8 @@ mod tests {
         );
         let m = Config::masks();
         assert_eq!(names(&m), ["confirmed", "low", "reid", "tentative"]);
+        // Without frames (no appearance) lost mask tracks are matched as box mode's are.
+        assert_eq!(names(&m.without_frames()), names(&d));
         let s = stages(&m);
         // Lost mask tracks join the main association while their gap is short.
         assert_eq!(s[0].tracks, StageTracks::Recent(m.lost_main_frames));

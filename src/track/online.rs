@@ -83,6 +83,8 @@ pub struct Tracker {
     config: Config,
     /// The association stages, built from `config`.
     stages: Vec<Stage>,
+    /// The rules and stages for frames given without their image ([`Config::without_frames`]).
+    frameless: (Config, Vec<Stage>),
     costs: CostModel,
     reid_costs: CostModel,
     extractor: Box<dyn FeatureExtractor>,
@@ -141,8 +143,10 @@ impl Tracker {
             high: config.high_score,
             birth: config.new_track_score,
         };
+        let frameless = config.without_frames();
         Ok(Self {
             stages: stages(&config),
+            frameless: (frameless.clone(), stages(&frameless)),
             costs,
             reid_costs,
             extractor: Box::new(MaskFeatures::new(config.appearance.clone(), needs)),
@@ -313,7 +317,7 @@ impl Tracker {
             let mut out = Vec::new();
             let matched = t.update_matched(&matches, &dets, &mut out)?;
             t.refresh_appearance(frame, &matches, &dets);
-            t.age(&matched);
+            t.age(&matched, frame.is_some());
             t.coast(&mut out);
             t.spawn(frame, &dets, &det_used, &mut out)?;
             Ok::<_, TrackError>(out)
@@ -457,7 +461,12 @@ impl Tracker {
             Some(l) => Unmatched::Cost(l),
             None => Unmatched::MaxMatches,
         };
-        for stage in &self.stages {
+        let stages = if frame.is_some() {
+            &self.stages
+        } else {
+            &self.frameless.1
+        };
+        for stage in stages {
             let edges = match stage.costs {
                 StageCosts::Main => Cow::Borrowed(main),
                 StageCosts::Reid if self.reid_costs.terms().is_empty() => continue,
@@ -682,10 +691,15 @@ impl Tracker {
     }
 
     /// Unmatched tracks miss a frame; removed ones are dropped.
-    fn age(&mut self, matched: &[bool]) {
+    fn age(&mut self, matched: &[bool], has_frame: bool) {
+        let rules = if has_frame {
+            &self.config
+        } else {
+            &self.frameless.0
+        };
         let (tentative, lost) = (
             self.config.frames(self.config.max_tentative_misses),
-            self.config.frames(self.config.max_lost),
+            rules.frames(rules.max_lost),
         );
         let hindsight = self
             .config

@@ -40,7 +40,10 @@ impl Config {
     ///   ragged crowds, occluders and entering/leaving +0.3 to +0.7, ragged crossing −0.7 /
     ///   −0.9, the clean cells (no merged masks) unchanged. Box mode keeps it off: a box that
     ///   covers a neighbour's is usually an occlusion, not a merge (box grid −0.1).
-    /// - Shapes hide behind occluders for up to ~2 s: `max_lost` 60 (at 30 fps).
+    /// - Shapes hide behind occluders for up to ~2 s: `max_lost` 60 (at 30 fps). Masks given
+    ///   without their frames have no colours to re-identify a shape by after so long: there
+    ///   lost tracks follow box mode's rules (`max_lost_without_frames` = the defaults' 38, and
+    ///   `lost_reid_only` off; see [`Config::without_frames`]).
     /// - Detector-split masks are merged (`merge_fragments`); missed detections right after a
     ///   whole view are coasted over for 8 frames (`coast_frames`, always: a mask seen whole
     ///   does not vanish).
@@ -76,6 +79,7 @@ impl Config {
             },
             max_tentative_misses: 5,
             max_lost: 60,
+            max_lost_without_frames: Some(base.max_lost),
             reference_max_cost: Some(0.54),
             coast_frames: 8,
             coasting: None,
