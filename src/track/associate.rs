@@ -143,6 +143,32 @@ pub(crate) fn in_main(config: &Config, track: &Track) -> bool {
         || main_tracks(config).accepts_track(track)
 }
 
+/// The stages of a config for frames with their image, and of its
+/// [`Config::without_frames`] rules for frames without (no appearance to re-identify by).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct StagePlan {
+    with_frames: Vec<Stage>,
+    without_frames: Vec<Stage>,
+}
+
+impl StagePlan {
+    pub(crate) fn new(config: &Config) -> Self {
+        Self {
+            with_frames: stages(config),
+            without_frames: stages(&config.without_frames()),
+        }
+    }
+
+    /// The stages that run on a frame given with its image (`has_frame`) or without.
+    pub(crate) fn for_frame(&self, has_frame: bool) -> &[Stage] {
+        if has_frame {
+            &self.with_frames
+        } else {
+            &self.without_frames
+        }
+    }
+}
+
 /// The stages `config` describes, in the order they run:
 ///
 /// 1. tracks seen in the previous frame × high detections (with lost tracks in the same

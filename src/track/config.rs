@@ -653,6 +653,17 @@ impl Config {
         }
     }
 
+    /// Frames a confirmed track stays lost before it is removed, at the video's frame rate,
+    /// on a frame given with its image (`has_frame`: [`Config::max_lost`]) or without
+    /// ([`Config::without_frames`]).
+    pub fn max_lost_frames(&self, has_frame: bool) -> u32 {
+        let n = match (has_frame, self.max_lost_without_frames) {
+            (false, Some(n)) => n,
+            _ => self.max_lost,
+        };
+        self.frames(n)
+    }
+
     /// `frames` (a count given at [`Config::frame_counts_at`] fps) at the video's frame rate:
     /// scaled and rounded when [`Config::frame_rate`] is known, at least 1 when `frames` is.
     pub fn frames(&self, frames: u32) -> u32 {

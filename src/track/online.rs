@@ -53,7 +53,7 @@ use std::borrow::Cow;
 use std::sync::Arc;
 
 use super::appearance::cost_models;
-use super::associate::{in_main, score_edges, stages, Edge, Pair, Stage, StageCosts, Used};
+use super::associate::{in_main, score_edges, Edge, Pair, Stage, StageCosts, StagePlan, Used};
 use super::camera::Camera;
 use super::coasting::GapStats;
 use super::config::{Config, ReportBox};
@@ -81,10 +81,8 @@ type MotionBuilder = Box<dyn Fn(&BBox) -> Result<BoxMotion, MotionError> + Send>
 /// The online multi-object tracker. Owns its tracks and its id counter.
 pub struct Tracker {
     config: Config,
-    /// The association stages, built from `config`.
-    stages: Vec<Stage>,
-    /// The rules and stages for frames given without their image ([`Config::without_frames`]).
-    frameless: (Config, Vec<Stage>),
+    /// The association stages, built from `config` (and its rules without frames).
+    stages: StagePlan,
     costs: CostModel,
     reid_costs: CostModel,
     extractor: Box<dyn FeatureExtractor>,
@@ -143,10 +141,8 @@ impl Tracker {
             high: config.high_score,
             birth: config.new_track_score,
         };
-        let frameless = config.without_frames();
         Ok(Self {
-            stages: stages(&config),
-            frameless: (frameless.clone(), stages(&frameless)),
+            stages: StagePlan::new(&config),
             costs,
             reid_costs,
             extractor: Box::new(MaskFeatures::new(config.appearance.clone(), needs)),
@@ -225,9 +221,10 @@ impl Tracker {
         &self.config
     }
 
-    /// The association stages, in the order they run.
+    /// The association stages on frames given with their image, in the order they run
+    /// (without it, those of [`Config::without_frames`]).
     pub fn stages(&self) -> &[Stage] {
-        &self.stages
+        self.stages.for_frame(true)
     }
 
     /// The live tracks (tentative, confirmed and lost).
@@ -461,12 +458,7 @@ impl Tracker {
             Some(l) => Unmatched::Cost(l),
             None => Unmatched::MaxMatches,
         };
-        let stages = if frame.is_some() {
-            &self.stages
-        } else {
-            &self.frameless.1
-        };
-        for stage in stages {
+        for stage in self.stages.for_frame(frame.is_some()) {
             let edges = match stage.costs {
                 StageCosts::Main => Cow::Borrowed(main),
                 StageCosts::Reid if self.reid_costs.terms().is_empty() => continue,
@@ -692,14 +684,9 @@ impl Tracker {
 
     /// Unmatched tracks miss a frame; removed ones are dropped.
     fn age(&mut self, matched: &[bool], has_frame: bool) {
-        let rules = if has_frame {
-            &self.config
-        } else {
-            &self.frameless.0
-        };
         let (tentative, lost) = (
             self.config.frames(self.config.max_tentative_misses),
-            rules.frames(rules.max_lost),
+            self.config.max_lost_frames(has_frame),
         );
         let hindsight = self
             .config
