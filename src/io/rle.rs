@@ -590,6 +590,37 @@ mod tests {
     }
 
     #[test]
+    fn from_mask_equals_per_pixel_encoding_on_wide_random_masks() {
+        // Masks wider and taller than the fixed pattern above: a blob with speckle (many runs
+        // per column, runs crossing column ends), clipped on every side.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for (w, h) in [(53u32, 37u32), (16, 5), (17, 1), (1, 23), (70, 40)] {
+            let bits: Vec<u8> = (0..w * h)
+                .map(|i| {
+                    let (x, y) = (i % w, i / w);
+                    let blob = (x as i64 - 20).pow(2) + (y as i64 - 15).pow(2) < 150;
+                    (blob ^ (next() % 13 == 0)) as u8
+                })
+                .collect();
+            let m = Mask::new(0, 0, w, h, bits).unwrap();
+            for (dx, dy) in [(0, 0), (5, 3), (-9, -4), (30, 20), (-60, 0), (0, 45)] {
+                let mm = m.translated(dx, dy);
+                assert_eq!(
+                    Rle::from_mask(&mm, 64, 48),
+                    from_mask_per_pixel(&mm, 64, 48),
+                    "{w}x{h} at {dx},{dy}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn to_mask_equals_full_bitmap_decoding() {
         let bits: Vec<u8> = (0..12 * 9)
             .map(|i| ((i * 5 + i / 7) % 4 == 0) as u8)
