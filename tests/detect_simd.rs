@@ -16,6 +16,10 @@ use shapetrack::detect::{BackgroundConfig, BackgroundSubtractor, Detector, Updat
 use shapetrack::frame::Frame;
 use shapetrack::synth::{Scene, SynthConfig};
 
+#[path = "common/fnv.rs"]
+mod fnv;
+use fnv::{committed_lines, Fnv, OFFSET};
+
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
@@ -67,32 +71,26 @@ fn digest(cfg: BackgroundConfig) -> u64 {
     let (w, h) = (157, 96);
     let mut scene = Scene::new(SynthConfig::demo().scaled_to(w, h)).unwrap();
     let mut det = BackgroundSubtractor::new(cfg).unwrap();
-    let mut d = 0xcbf2_9ce4_8422_2325u64;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            d ^= u64::from(b);
-            d = d.wrapping_mul(0x100_0000_01b3);
-        }
-    };
+    let mut d = Fnv(OFFSET);
     let mut found = 0;
     for _ in 0..40 {
         let f = scene.frame().unwrap();
         let dets = det.detect(&Frame::rgb(&f.image, w, h).unwrap()).unwrap();
         for v in det.background().unwrap_or(&[]) {
-            eat(&v.to_bits().to_le_bytes());
+            d.bytes(&v.to_bits().to_le_bytes());
         }
-        eat(det.foreground());
+        d.bytes(det.foreground());
         for x in &dets {
             for v in [x.bbox.x, x.bbox.y, x.bbox.w, x.bbox.h, x.score] {
-                eat(&v.to_bits().to_le_bytes());
+                d.f64(v);
             }
-            eat(&x.mask.as_ref().map_or(0, |m| m.area()).to_le_bytes());
+            d.u64(x.mask.as_ref().map_or(0, |m| m.area()));
         }
         found += dets.len();
     }
     // Shapes were found: foreground pixels, and their scores (the update's `|Z − B|`), count.
     assert!(found > 0);
-    d
+    d.0
 }
 
 /// The model update under three policies: the default (foreground pixels learn only once
@@ -133,11 +131,7 @@ fn digests() -> Vec<String> {
 const COMMITTED: &str = include_str!("data/detect/background_digest.txt");
 
 fn committed() -> Vec<String> {
-    COMMITTED
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| l.trim().to_string())
-        .collect()
+    committed_lines(COMMITTED)
 }
 
 #[test]

@@ -23,25 +23,12 @@ use shapetrack::{BBox, Detection, TrackedShape};
 /// Frames of the scene digested: past the background model's warm-up, through crossings.
 const FRAMES: u32 = 90;
 
-/// FNV-1a, 64 bits: stable across targets (no `Hash` impl whose output may change).
-struct Fnv(u64);
+#[path = "common/fnv.rs"]
+mod fnv;
+use fnv::{committed_lines, Fnv, OFFSET};
 
+/// What the pipeline's stages report, taken into a digest.
 impl Fnv {
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= u64::from(x);
-            self.0 = self.0.wrapping_mul(0x100_0000_01b3);
-        }
-    }
-
-    fn u64(&mut self, x: u64) {
-        self.bytes(&x.to_le_bytes());
-    }
-
-    fn f64(&mut self, x: f64) {
-        self.u64(x.to_bits());
-    }
-
     fn bbox(&mut self, b: &BBox) {
         for v in [b.x, b.y, b.w, b.h] {
             self.f64(v);
@@ -92,7 +79,7 @@ fn digest() -> [u64; 3] {
     let mut background = BackgroundSubtractor::new(BackgroundConfig::default()).unwrap();
     let mut moving = MovingCameraDetector::new(MovingConfig::default()).unwrap();
     let mut tracker = Tracker::new(Config::masks()).unwrap();
-    let (mut bg, mut mv, mut tr) = (Fnv(0xcbf2_9ce4_8422_2325), Fnv(1), Fnv(2));
+    let (mut bg, mut mv, mut tr) = (Fnv(OFFSET), Fnv(1), Fnv(2));
     for f in Scene::new(cfg).unwrap().take(FRAMES as usize) {
         let frame = f.frame().unwrap();
         let dets = background.detect(&frame).unwrap();
@@ -108,11 +95,7 @@ fn digest() -> [u64; 3] {
 const COMMITTED: &str = include_str!("data/track/pipeline_digest.txt");
 
 fn committed() -> Vec<String> {
-    COMMITTED
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| l.trim().to_string())
-        .collect()
+    committed_lines(COMMITTED)
 }
 
 fn lines(d: [u64; 3]) -> Vec<String> {

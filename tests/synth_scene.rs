@@ -9,19 +9,18 @@ use shapetrack::synth::{
 };
 use shapetrack::{BBox, Point};
 
+#[path = "common/fnv.rs"]
+mod fnv;
+use fnv::{Fnv, OFFSET};
+
 fn frames(cfg: SynthConfig) -> Vec<SynthFrame> {
     Scene::new(cfg).unwrap().collect()
 }
 
 /// FNV-1a over everything a frame reports.
 fn digest(frames: &[SynthFrame]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x100_0000_01b3);
-        }
-    };
+    let mut h = Fnv(OFFSET);
+    let mut eat = |bytes: &[u8]| h.bytes(bytes);
     for f in frames {
         eat(&f.index.to_le_bytes());
         eat(&f.image);
@@ -45,7 +44,7 @@ fn digest(frames: &[SynthFrame]) -> u64 {
             }
         }
     }
-    h
+    h.0
 }
 
 #[test]
