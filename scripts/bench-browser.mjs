@@ -18,11 +18,12 @@
 // moving-camera detector learns the scene again). One line per detector goes to the console
 // and is appended to target/e2e/fps.txt; it also gives the worker's whole frame (loading the
 // bitmap into wasm, detecting, tracking) as the app would run at full speed. Names: the app's
-// (`moving`, `background`, `auto`, `ssd`, `ssd-moving`), and `moving-coarse`: the moving-camera
-// detector without its box → mask refinement (`refine: null`), whose difference to `moving` is
-// what refinement costs. `refine` alone (oracle boxes → masks, as `shapetrack detect-eval
-// --methods refine`) has no wasm binding: the app refines only inside MovingDetector, so it is
-// skipped with a note. Not run by default: decoding the sequence and a hundred frames of the
+// (`moving`, `background`, `auto`, `ssd`, `ssd-moving`, `moving-ssd`), `moving-coarse`: the
+// moving-camera detector without its box → mask refinement (`refine: null`), whose difference
+// to `moving` is what refinement costs, and `ssd-moving-filled`: the SSD's boxes unrefined
+// (`refine: false`), whose difference to `ssd-moving` is what refining its boxes costs.
+// `refine` alone (oracle boxes → masks, as `shapetrack detect-eval --methods refine`) needs
+// the ground truth's boxes, which no app detector has, so it is skipped with a note. Not run by default: decoding the sequence and a hundred frames of the
 // moving-camera detector take a minute on this machine, on top of the demo's.
 //
 // With `--page SIZES` (comma-separated WxH, e.g. `1280x720,1920x1080`) it runs the app's bench
@@ -44,7 +45,7 @@
 
 import { appendFileSync, existsSync, mkdirSync, readFileSync, readdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { DIST, OUT, ROOT, crowdTracks, launch, serve, untilState, watchErrors } from '../tests/e2e/harness.mjs';
+import { DIST, OUT, ROOT, crowdTracks, installWorkerClient, launch, serve, untilState, watchErrors } from '../tests/e2e/harness.mjs';
 
 const arg = (/** @type {string} */ name, /** @type {number} */ fallback) => {
   const i = process.argv.indexOf(name);
@@ -69,6 +70,8 @@ const PORT = arg('--port', 47411);
 const VARIANTS = {
   // No refinement: the coarse blobs, upscaled (MovingConfig's `refine: None`).
   'moving-coarse': { detector: 'moving', options: { refine: null } },
+  // The SSD's boxes as filled rectangles (no BoxRefiner).
+  'ssd-moving-filled': { detector: 'ssd-moving', options: { refine: false } },
 };
 
 const server = await serve(DIST, PORT);
@@ -212,6 +215,7 @@ async function benchDetectors(names) {
     return route.fulfill({ contentType: 'image/jpeg', body: readFileSync(join(dir, name)) });
   });
   await page.goto(`${server.url}bench/`);
+  await installWorkerClient(page);
   // Decoded (and rescaled) once, outside any timing.
   const [width, height] = await page.evaluate(
     async ({ files, size }) => {
@@ -233,8 +237,8 @@ async function benchDetectors(names) {
   for (const name of names) {
     if (name === 'refine') {
       const note =
-        'detector refine: skipped (no wasm binding refines boxes alone: the app refines only inside ' +
-        'MovingDetector; moving vs moving-coarse gives its cost there)';
+        'detector refine: skipped (it refines the ground truth\'s boxes, which no app detector has; ' +
+        'moving vs moving-coarse and ssd-moving vs ssd-moving-filled give refinement\'s cost)';
       console.log(note);
       continue;
     }
@@ -242,33 +246,8 @@ async function benchDetectors(names) {
     const r = await page.evaluate(
       async ({ url, detector, options, frames: measured, width, height }) => {
         const frames = /** @type {ImageBitmap[]} */ (/** @type {any} */ (window).__frames);
-        const worker = new Worker(url, { type: 'module' });
-        let next = 1;
-        /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void }>} */
-        const pending = new Map();
-        worker.addEventListener('message', (e) => {
-          const p = pending.get(e.data.id);
-          if (!p || e.data.progress) return;
-          pending.delete(e.data.id);
-          if (e.data.ok) p.resolve(e.data);
-          else p.reject(new Error(e.data.error));
-        });
-        worker.addEventListener('error', (e) => {
-          for (const p of pending.values()) p.reject(new Error(e.message || 'worker failed to load'));
-          pending.clear();
-        });
-        /**
-         * One request of the worker protocol (www/src/worker/protocol.js).
-         * @param {Record<string, unknown>} req
-         * @param {Transferable[]} [transfer]
-         * @returns {Promise<any>}
-         */
-        const request = (req, transfer = []) =>
-          new Promise((resolve, reject) => {
-            const id = next++;
-            pending.set(id, { resolve, reject });
-            worker.postMessage({ ...req, id }, transfer);
-          });
+        const worker = /** @type {any} */ (window).__openWorker(url);
+        const request = worker.request;
         // As the app opens an image sequence (www/src/app.js `openSource`): its size, 25 fps,
         // the offline pass possible.
         await request({ type: 'open', source: { kind: 'frames', width, height, fps: 25 }, detector, detectorOptions: options, offline: true });

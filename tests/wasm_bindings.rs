@@ -1050,14 +1050,19 @@ fn paint(buf: &FrameBuffer, pan: i32, square: Option<(i32, i32)>) {
             px[i..i + 3].fill(v as u8);
         }
     }
-    // The view is made after the Vec: allocating may grow (and detach) wasm memory.
+    write_pixels(buf, &px);
+}
+
+/// Copies RGBA bytes into the frame buffer, as JS writes a frame into wasm memory.
+fn write_pixels(buf: &FrameBuffer, px: &[u8]) {
+    // The view is made after the caller's Vec: allocating may grow (and detach) wasm memory.
     let mem: js_sys::WebAssembly::Memory = wasm_bindgen::memory().dyn_into().unwrap();
     js_sys::Uint8Array::new_with_byte_offset_and_length(
         &mem.buffer(),
         buf.ptr() as u32,
         buf.len() as u32,
     )
-    .copy_from(&px);
+    .copy_from(px);
 }
 
 #[wasm_bindgen_test]
@@ -1150,5 +1155,177 @@ fn moving_detector_settings_are_checked_and_name_their_field() {
         if ok["min_age"] == 5 {
             assert_eq!(det.unwrap().warmup_frames(), 5);
         }
+    }
+}
+
+/// A red disc (centre `(80, 60)`, radius 25) on green and blue stripes, 160×120.
+fn paint_disc(buf: &FrameBuffer) -> Vec<bool> {
+    let (w, h) = (buf.width() as usize, buf.height() as usize);
+    let mut px = vec![255u8; buf.len()];
+    let mut disc = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let (dx, dy) = (x as f64 + 0.5 - 80.0, y as f64 + 0.5 - 60.0);
+            let inside = dx.hypot(dy) < 25.0;
+            disc[y * w + x] = inside;
+            let c = if inside {
+                [200, 40, 30]
+            } else if (x / 6 + y / 9) % 2 == 0 {
+                [40, 160, 60]
+            } else {
+                [50, 70, 170]
+            };
+            let i = 4 * (y * w + x);
+            px[i..i + 3].copy_from_slice(&c);
+        }
+    }
+    write_pixels(buf, &px);
+    disc
+}
+
+/// A detection as `Detections.toList` hands it to JS.
+#[derive(serde::Deserialize)]
+struct Listed {
+    score: f64,
+    mask: Option<ListedMask>,
+}
+
+#[derive(serde::Deserialize)]
+struct ListedMask {
+    x: i32,
+    y: i32,
+    width: u32,
+    height: u32,
+    #[serde(with = "serde_bytes")]
+    data: Vec<u8>,
+}
+
+impl ListedMask {
+    fn area(&self) -> usize {
+        self.data.iter().filter(|&&v| v != 0).count()
+    }
+
+    /// IoU with a frame-sized 0/1 image `w` pixels wide.
+    fn iou(&self, truth: &[bool], w: usize) -> f64 {
+        let mut inter = 0;
+        for (k, &v) in self.data.iter().enumerate() {
+            let x = self.x + (k % self.width as usize) as i32;
+            let y = self.y + (k / self.width as usize) as i32;
+            if v != 0 && truth.get(y as usize * w + x as usize) == Some(&true) {
+                inter += 1;
+            }
+        }
+        let union = self.area() + truth.iter().filter(|&&v| v).count() - inter;
+        inter as f64 / union as f64
+    }
+}
+
+#[wasm_bindgen_test]
+fn box_refiner_turns_boxes_into_the_objects_masks_highest_scores_first() {
+    let buf = FrameBuffer::new(160.0, 120.0).unwrap();
+    let disc = paint_disc(&buf);
+    let lists = serde_json::json!({
+        "boxes": [
+            // Past the budget of one (the lower score): filled, not refined.
+            { "bbox": { "x": 5, "y": 5, "w": 30, "h": 20 }, "score": 0.4 },
+            // The disc's box, a little loose, as a detector gives it.
+            { "bbox": { "x": 52, "y": 32, "w": 56, "h": 56 }, "score": 0.9 },
+        ],
+        "masks": [{ "x": 140, "y": 100, "width": 2, "height": 1, "data": [1, 0], "score": 0.7 }],
+    });
+    let mut dets = Detections::from_lists(ts(js(&lists))).unwrap();
+    let refiner = BoxRefiner::new(None).unwrap();
+    assert_eq!(refiner.refine(&buf, &mut dets, Some(1)).unwrap(), 1);
+    let listed: Vec<Listed> =
+        serde_wasm_bindgen::from_value(dets.to_list().unwrap().into()).unwrap();
+    let by_score = |s: f64| {
+        listed
+            .iter()
+            .find(|d| d.score == s)
+            .and_then(|d| d.mask.as_ref())
+            .expect("every detection leaves with a mask")
+    };
+    let m = by_score(0.9);
+    let iou = m.iou(&disc, 160);
+    assert!(iou > 0.85, "the disc's outline, IoU {iou}");
+    assert!(
+        (m.area() as f64) < 0.9 * 56.0 * 56.0,
+        "not the filled box: {} px",
+        m.area()
+    );
+    assert_eq!(by_score(0.4).area(), 600, "past the budget: the filled box");
+    let kept = by_score(0.7);
+    assert_eq!(
+        (kept.x, kept.y, kept.width, kept.height, kept.area()),
+        (140, 100, 2, 1, 1)
+    );
+
+    // Without a budget every box is refined (the stripes' box finds the stripe it holds, or
+    // falls back to its filled box; either way it keeps a mask).
+    let mut all = Detections::from_lists(ts(js(&lists))).unwrap();
+    let n = refiner.refine(&buf, &mut all, None).unwrap();
+    assert!((1..=2).contains(&n), "{n} refined");
+    let listed: Vec<Listed> =
+        serde_wasm_bindgen::from_value(all.to_list().unwrap().into()).unwrap();
+    assert!(listed.iter().all(|d| d.mask.is_some()));
+    assert_eq!(listed.len(), 3);
+}
+
+#[wasm_bindgen_test]
+fn box_refiner_settings_are_checked_and_name_their_field() {
+    for (opts, field) in [
+        (serde_json::json!({ "max_sid": 80 }), "max_sid"),
+        (serde_json::json!({ "smoothness": "high" }), "smoothness"),
+        (serde_json::json!({ "iterations": 0 }), "iterations"),
+    ] {
+        let msg = error_message(BoxRefiner::new(Some(settings(&opts))).err().unwrap());
+        assert!(msg.contains(field), "{opts}: {msg}");
+    }
+    assert!(BoxRefiner::new(Some(settings(&serde_json::json!({ "iterations": 1 })))).is_ok());
+    let refiner = BoxRefiner::new(None).unwrap();
+    let buf = FrameBuffer::new(16.0, 16.0).unwrap();
+    let lists =
+        serde_json::json!({ "boxes": [{ "bbox": { "x": 100, "y": 100, "w": 5, "h": 5 } }] });
+    let mut dets = Detections::from_lists(ts(js(&lists))).unwrap();
+    // A box wholly outside the frame: nothing to refine, nothing to fill; kept as a box.
+    assert_eq!(refiner.refine(&buf, &mut dets, None).unwrap(), 0);
+    assert_eq!(dets.len(), 1);
+}
+
+#[wasm_bindgen_test]
+fn add_uncovered_appends_only_what_the_list_does_not_hold() {
+    // The list: a 10×10 mask at (0, 0) and a 10×10 box at (50, 50).
+    let own = serde_json::json!({
+        "masks": [{ "x": 0, "y": 0, "width": 10, "height": 10, "data": vec![1u8; 100], "class": 3 }],
+        "boxes": [{ "bbox": { "x": 50, "y": 50, "w": 10, "h": 10 } }],
+    });
+    let other = serde_json::json!({
+        "masks": [
+            // 60 % of it on the mask: held at 0.5, not at 0.7.
+            { "x": 4, "y": 0, "width": 10, "height": 10, "data": vec![1u8; 100], "score": 0.6 },
+            // Wholly on the box (a detection without a mask counts as its filled box).
+            { "x": 52, "y": 52, "width": 4, "height": 4, "data": vec![1u8; 16], "score": 0.7 },
+            // Nowhere near: always appended.
+            { "x": 100, "y": 100, "width": 5, "height": 5, "data": vec![1u8; 25], "score": 0.8 },
+        ],
+    });
+    let other = Detections::from_lists(ts(js(&other))).unwrap();
+    let scores = |d: &Detections| -> Vec<f64> {
+        let l: Vec<Listed> = serde_wasm_bindgen::from_value(d.to_list().unwrap().into()).unwrap();
+        l.iter().map(|d| d.score).collect()
+    };
+    let mut a = Detections::from_lists(ts(js(&own))).unwrap();
+    assert_eq!(a.add_uncovered(&other, 0.5).unwrap(), 1);
+    assert_eq!(scores(&a), vec![1.0, 1.0, 0.8]);
+    let mut b = Detections::from_lists(ts(js(&own))).unwrap();
+    assert_eq!(b.add_uncovered(&other, 0.7).unwrap(), 2);
+    assert_eq!(scores(&b), vec![1.0, 1.0, 0.6, 0.8]);
+    // An empty list takes everything; `other` is left as it was.
+    let mut c = Detections::from_lists(ts(js(&serde_json::json!({})))).unwrap();
+    assert_eq!(c.add_uncovered(&other, 0.5).unwrap(), 3);
+    assert_eq!(other.len(), 3);
+    for bad in [-0.1, 1.5, f64::NAN] {
+        let msg = error_message(a.add_uncovered(&other, bad).err().unwrap());
+        assert!(msg.contains("covered"), "{bad}: {msg}");
     }
 }

@@ -1,9 +1,11 @@
 //! Detections: lists handed in by detectors written in JS, the background detector, the
-//! moving-camera detector, and the judge that tells the two kinds of footage apart.
+//! moving-camera detector, the judge that tells the two kinds of footage apart, and the
+//! refinement that turns a box detector's boxes into masks.
 
 use super::*;
 use crate::detect::{
-    BackgroundSubtractor, CameraJudge as CoreJudge, DetectError, Detector, MovingCameraDetector,
+    refine_box, BackgroundSubtractor, CameraJudge as CoreJudge, DetectError, Detector,
+    MovingCameraDetector, RefineConfig,
 };
 use crate::frame::{BBox, Detection, Mask};
 use serde::{Deserialize, Serialize};
@@ -134,6 +136,36 @@ impl Detections {
     #[wasm_bindgen(getter, js_name = isEmpty)]
     pub fn is_empty(&self) -> bool {
         self.inner.is_empty()
+    }
+
+    /// Appends the detections of `other` that this list does not already hold: one of
+    /// `other`'s is left out when at least `covered` (in `[0, 1]`) of its pixels lie on a
+    /// single detection of this list (a detection without a mask counts as its filled box).
+    /// Returns how many were appended. For combining two detectors' output: a class
+    /// detector's objects (this list) with the moving objects it does not know (`other`).
+    #[wasm_bindgen(js_name = addUncovered)]
+    pub fn add_uncovered(&mut self, other: &Detections, covered: f64) -> Result<u32, JsValue> {
+        if !(covered.is_finite() && (0.0..=1.0).contains(&covered)) {
+            return Err(js_error(BindingError::Invalid(format!(
+                "addUncovered: covered must be in [0, 1], not {covered}"
+            ))));
+        }
+        let filled = |d: &Detection| d.mask.clone().unwrap_or_else(|| Mask::from_bbox(&d.bbox));
+        let own: Vec<Mask> = self.inner.iter().map(filled).collect();
+        let mut added = 0u32;
+        for d in &other.inner {
+            let m = filled(d);
+            let area = m.area() as f64;
+            let held = area > 0.0
+                && own
+                    .iter()
+                    .any(|o| o.intersection(&m) as f64 >= covered * area);
+            if !held {
+                self.inner.push(d.clone());
+                added += 1;
+            }
+        }
+        Ok(added)
     }
 
     /// The detections as plain JS objects (copies the masks).
@@ -267,6 +299,85 @@ impl MovingDetector {
     pub fn camera_shift(&self) -> Option<f64> {
         let scale = self.inner.scale() as f64;
         self.inner.last_motion().map(|m| m.displacement * scale)
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Box → mask refinement
+
+/// Turns a box detector's boxes (SSD, boxes from a file) into masks of the objects inside
+/// them: the core's `refine_box`, a GrabCut-like colour segmentation of each box against a
+/// ring of background around it, on a working crop of at most `max_side` pixels a side (the
+/// bound on each box's cost). No model weights.
+#[wasm_bindgen]
+pub struct BoxRefiner {
+    cfg: RefineConfig,
+}
+
+#[wasm_bindgen]
+impl BoxRefiner {
+    /// A refiner with the core's defaults, or the settings given (`RefineConfig`'s fields;
+    /// missing ones keep their defaults, unknown or out-of-range ones are errors).
+    #[wasm_bindgen(constructor)]
+    pub fn new(config: Option<RefineSettings>) -> Result<BoxRefiner, JsValue> {
+        Ok(BoxRefiner {
+            cfg: settings::refine_config(config.as_ref())?,
+        })
+    }
+
+    /// Refines the box-only detections of `dets` in the frame in `buf`, in place, the
+    /// highest scores first and at most `max` of them (all when `undefined`: a page bounds a
+    /// frame's cost with it). Each refined box takes the mask found inside it, and its box
+    /// becomes the mask's. A box the refinement finds nothing in, or one past `max`, takes
+    /// its filled box (clipped to the frame) as its mask: every detection leaves with a mask,
+    /// and none is dropped. Detections that came with a mask keep it. Returns how many boxes
+    /// were refined.
+    pub fn refine(
+        &self,
+        buf: &FrameBuffer,
+        dets: &mut Detections,
+        max: Option<u32>,
+    ) -> Result<u32, JsValue> {
+        let frame = buf.frame()?;
+        // The `max` highest-scoring box-only detections (equal scores: the detector's order),
+        // picked by repeated scans rather than a sort: `max` is a handful and a frame holds
+        // at most a few hundred boxes, and a sort by a closure costs the module 7 KB.
+        let budget = max.map_or(usize::MAX, |m| m as usize);
+        let mut chosen = vec![false; dets.inner.len()];
+        for _ in 0..budget.min(dets.inner.len()) {
+            let mut best: Option<(usize, f64)> = None;
+            for (i, d) in dets.inner.iter().enumerate() {
+                let free = d.mask.is_none() && !chosen.get(i).copied().unwrap_or(true);
+                if free && best.is_none_or(|(_, s)| d.score > s) {
+                    best = Some((i, d.score));
+                }
+            }
+            match best.and_then(|(i, _)| chosen.get_mut(i)) {
+                Some(c) => *c = true,
+                None => break,
+            }
+        }
+        let mut refined = 0u32;
+        for (d, &pick) in dets.inner.iter_mut().zip(&chosen) {
+            if d.mask.is_some() {
+                continue;
+            }
+            let found = if pick {
+                refine_box(&frame, &d.bbox, &self.cfg).map_err(js_error)?
+            } else {
+                None
+            };
+            if found.is_some() {
+                refined += 1;
+            }
+            let mask = found
+                .unwrap_or_else(|| Mask::from_bbox(&d.bbox).clipped(frame.width(), frame.height()));
+            if !mask.is_empty() {
+                d.bbox = mask.bbox();
+                d.mask = Some(mask);
+            }
+        }
+        Ok(refined)
     }
 }
 

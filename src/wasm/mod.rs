@@ -37,7 +37,7 @@ pub use frame::*;
 pub use offline::*;
 pub use settings::{
     BackgroundSettings, EvalSettings, FollowSettings, MovingSettings, OfflineSettings,
-    TrackerSettings,
+    RefineSettings, TrackerSettings,
 };
 pub use synth::*;
 pub use tracker::*;

@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::detect::background::BackgroundConfig;
-use crate::detect::MovingConfig;
+use crate::detect::{MovingConfig, RefineConfig};
 use crate::eval::EvalConfig;
 use crate::follow::FollowConfig;
 use crate::track::offline::OfflineConfig;
@@ -37,6 +37,8 @@ export type OfflineSettings = { fps: number; width?: number; height?: number } &
 export type BackgroundSettings = DeepPartial<BackgroundConfig>;
 /** The moving-camera detector's settings over `MovingConfig`'s defaults. */
 export type MovingSettings = DeepPartial<MovingConfig>;
+/** The box → mask refinement's settings over `RefineConfig`'s defaults. */
+export type RefineSettings = DeepPartial<RefineConfig>;
 /** The follower's settings over `FollowConfig`'s defaults. */
 export type FollowSettings = DeepPartial<FollowConfig>;
 /** How `evaluate` scores, over its defaults: box IoU at 0.5, every record as given
@@ -59,6 +61,9 @@ extern "C" {
     /// The moving-camera detector's settings (`MovingSettings`).
     #[wasm_bindgen(typescript_type = "MovingSettings")]
     pub type MovingSettings;
+    /// The box → mask refinement's settings (`RefineSettings`).
+    #[wasm_bindgen(typescript_type = "RefineSettings")]
+    pub type RefineSettings;
     /// The follower's settings (`FollowSettings`).
     #[wasm_bindgen(typescript_type = "FollowSettings")]
     pub type FollowSettings;
@@ -192,6 +197,13 @@ pub(super) fn background_config(
 /// The moving-camera detector's config from its settings object.
 pub(super) fn moving_config(v: Option<&MovingSettings>) -> Result<MovingConfig, JsValue> {
     overlay(MovingConfig::default(), v.map(|v| v.as_ref()))
+}
+
+/// The box → mask refinement's config from its settings object (validated).
+pub(super) fn refine_config(v: Option<&RefineSettings>) -> Result<RefineConfig, JsValue> {
+    let cfg = overlay(RefineConfig::default(), v.map(|v| v.as_ref()))?;
+    cfg.validate().map_err(js_error)?;
+    Ok(cfg)
 }
 
 /// The follower's config from its settings object.

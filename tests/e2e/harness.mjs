@@ -161,6 +161,47 @@ export function watchErrors(page) {
 }
 
 /**
+ * Defines `window.__openWorker(url)` in `page`: starts the app's tracker worker bundle at `url`
+ * (a same-origin module) and returns `{ request, terminate }`, `request(req, transfer)` sending
+ * one message of the worker protocol (www/src/worker/protocol.js) and resolving with its
+ * answer (progress reports skipped). For tools that drive the worker without the app's page
+ * (scripts/bench-browser.mjs, scripts/detect-eval-browser.mjs).
+ * @param {import('playwright-core').Page} page
+ */
+export function installWorkerClient(page) {
+  return page.evaluate(() => {
+    /** @param {string} url */
+    /** @type {any} */ (window).__openWorker = (url) => {
+      const worker = new Worker(url, { type: 'module' });
+      let next = 1;
+      /** @type {Map<number, { resolve: (v: any) => void, reject: (e: Error) => void }>} */
+      const pending = new Map();
+      worker.addEventListener('message', (e) => {
+        const p = pending.get(e.data.id);
+        if (!p || e.data.progress) return;
+        pending.delete(e.data.id);
+        if (e.data.ok) p.resolve(e.data);
+        else p.reject(new Error(e.data.error));
+      });
+      worker.addEventListener('error', (e) => {
+        for (const p of pending.values()) p.reject(new Error(e.message || 'worker failed to load'));
+        pending.clear();
+      });
+      return {
+        /** @param {Record<string, unknown>} req @param {Transferable[]} [transfer] @returns {Promise<any>} */
+        request: (req, transfer = []) =>
+          new Promise((resolve, reject) => {
+            const id = next++;
+            pending.set(id, { resolve, reject });
+            worker.postMessage({ ...req, id }, transfer);
+          }),
+        terminate: () => worker.terminate(),
+      };
+    };
+  });
+}
+
+/**
  * The app's page state (`window.__shapetrack.state()`), or null while the page is (re)loading.
  * @param {import('playwright-core').Page} page
  * @returns {Promise<any>}

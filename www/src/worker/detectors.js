@@ -270,6 +270,67 @@ function automatic(options) {
   return auto;
 }
 
+/**
+ * Share of a moving blob's pixels on one SSD mask above which the combined detector takes the
+ * blob for that object again and leaves it out (the SSD's mask is kept: it carries a class,
+ * and its box was refined on the object alone where the blob may hold ground the camera's
+ * motion model missed).
+ */
+export const COVERED = 0.5;
+
+/**
+ * The moving-camera detector and the SSD together, for a moving camera: the SSD's objects
+ * (classed, each box refined into a mask) and the moving blobs of objects the SSD does not
+ * know or missed (a camel, a bus seen whole), a blob lying mostly on one SSD mask left out
+ * (`COVERED`). Only boxes the SSD is sure of (MediaPipe's own 0.5) join: the tracker takes
+ * the moving detector's settings, whose thresholds are for blob scores. Costs the two
+ * detectors' time together.
+ * @type {DetectorFactory}
+ */
+function movingWithSsd(options) {
+  const moving = movingCamera(/** @type {Record<string, unknown>} */ (options.moving ?? {}));
+  const ssd = ssdDetector({ minScore: 0.5, .../** @type {import('./detectors/ssd.js').SsdOptions} */ (options.ssd ?? {}), movingCamera: true });
+  const covered = /** @type {number} */ (options.covered ?? COVERED);
+  /** @type {Core | null} */
+  let wasm = null;
+  /** @type {Detector & { classes: string[] }} */
+  const detector = {
+    name: 'moving-ssd',
+    tracker: MOVING_TRACKER,
+    classes: [],
+    async init(ctx) {
+      wasm = ctx.core;
+      await Promise.all([moving.init(ctx), ssd.init(ctx)]);
+      detector.classes = ssd.classes;
+    },
+    async detect(frame) {
+      if (!wasm) throw new Error('moving-camera + SSD detector used before init');
+      const blobs = /** @type {Detections} */ (await moving.detect(frame));
+      try {
+        const out = await ssd.detect(frame);
+        const objects = out instanceof wasm.Detections ? out : wasm.Detections.fromLists(out);
+        try {
+          objects.addUncovered(blobs, covered);
+        } catch (e) {
+          objects.free();
+          throw e;
+        }
+        return objects;
+      } finally {
+        blobs.free();
+      }
+    },
+    dispose() {
+      moving.dispose?.();
+      ssd.dispose?.();
+    },
+    warmup() {
+      return moving.warmup?.() ?? null;
+    },
+  };
+  return detector;
+}
+
 registerDetector('auto', 'Automatic (static or moving camera)', automatic);
 registerDetector('background', 'Background', backgroundSubtractor);
 registerDetector('moving', 'Moving camera (masks)', movingCamera);
@@ -278,3 +339,4 @@ registerDetector('scene', 'Scene masks (demo)', sceneMasks);
 // moving camera, where a background model means nothing and every box is its own mask.
 registerDetector('ssd', 'SSD objects', (options) => ssdDetector(options));
 registerDetector('ssd-moving', 'SSD objects, moving camera', (options) => ssdDetector({ ...options, movingCamera: true }));
+registerDetector('moving-ssd', 'Moving camera + SSD objects (masks)', movingWithSsd);

@@ -52,9 +52,13 @@
  *   timings: Timings,
  *   warmup: import('./detectors.js').Warmup | null,
  *   choice: import('./detectors.js').Choice | null,
+ *   detected?: import('../../pkg/shapetrack.js').DetectionList,
  * }} StepResult  `warmup`: how far the detector's model has learnt the scene (a background
  *   model's first frames detect nothing); null for detectors that need no warm-up; `choice`:
- *   the detector the automatic one chose, once it has
+ *   the detector the automatic one chose, once it has; `detected`: the detector's own output
+ *   (boxes, cropped masks, scores, classes), only when the step asked for it with
+ *   `detections: true` (tools that score a detector apart from the tracker, e.g.
+ *   scripts/detect-eval-browser.mjs)
  *
  * @typedef {import('../../pkg/shapetrack.js').FollowStepJs & { frame: number }} FollowStep
  *   the follower's answer for one frame
@@ -62,7 +66,7 @@
  * @typedef {{ type: 'open' } & OpenRequest
  *   | { type: 'attach', canvas: OffscreenCanvas }
  *   | { type: 'paint', width: number, height: number, bitmap?: ImageBitmap | null }
- *   | { type: 'step', frame: number, bitmap?: ImageBitmap, display?: boolean }
+ *   | { type: 'step', frame: number, bitmap?: ImageBitmap, display?: boolean, detections?: boolean }
  *   | { type: 'setDetector', detector: string, detectorOptions?: Record<string, unknown> }
  *   | { type: 'render', frame: number }
  *   | { type: 'finish' }

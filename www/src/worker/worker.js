@@ -91,7 +91,7 @@ async function dispatch(req) {
       paint(req.width, req.height, req.bitmap ?? null);
       return { result: {}, transfer: [] };
     case 'step':
-      return { result: await step(req.frame, req.bitmap ?? null, req.display !== false), transfer: [] };
+      return { result: await step(req.frame, req.bitmap ?? null, req.display !== false, req.detections === true), transfer: [] };
     case 'render':
       return { result: await render(req.frame), transfer: [] };
     case 'setDetector':
@@ -328,13 +328,15 @@ function paintBuffer(s) {
 }
 
 /**
- * Tracks one frame; paints it on the page's canvas when `display`.
+ * Tracks one frame; paints it on the page's canvas when `display`; returns the detector's own
+ * output too when `withDetections`.
  * @param {number} frame
  * @param {ImageBitmap | null} bitmap
  * @param {boolean} display
+ * @param {boolean} [withDetections]
  * @returns {Promise<Omit<import('./protocol.js').StepResult, 'bitmap'>>}
  */
-async function step(frame, bitmap, display) {
+async function step(frame, bitmap, display, withDetections = false) {
   const s = need();
   const t0 = performance.now();
   /** @type {Synthetic | null} */
@@ -360,7 +362,11 @@ async function step(frame, bitmap, display) {
   const detections = dets.len;
   /** @type {import('../../pkg/shapetrack.js').Shapes} */
   let shapes;
+  /** @type {import('../../pkg/shapetrack.js').DetectionList | undefined} */
+  let detected;
   try {
+    // Before the tracker takes them (it may not keep them as given).
+    if (withDetections) detected = dets.toList();
     if (!s.reported && s.detector.tracker !== s.trackerSettings.detector) rebuildTracker(s);
     shapes = s.tracker.update(frame, s.buffer, dets);
   } finally {
@@ -383,6 +389,7 @@ async function step(frame, bitmap, display) {
     timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
     warmup: s.detector.warmup?.() ?? null,
     choice: s.detector.choice?.() ?? null,
+    ...(detected ? { detected } : {}),
   };
 }
 

@@ -6,10 +6,14 @@
 // worker caches them when first fetched, so the detector works offline once used online.
 //
 // Per frame: the frame stretched to 300×300, one inference, the 1917 anchors decoded and
-// suppressed (./ssd-decode.js), boxes mapped back to the frame. Each box becomes a mask: the
-// foreground of the core's background subtractor inside the box, or the filled box when the
-// foreground there is small or the camera moves (`movingCamera`, where a background model
-// means nothing).
+// suppressed (./ssd-decode.js), boxes mapped back to the frame. Each box becomes a mask: with
+// a still camera, the foreground of the core's background subtractor inside the box when it
+// fills enough of it; otherwise (a moving camera, where a background model means nothing, or
+// an object standing still) the core's box → mask refinement (`BoxRefiner`: a GrabCut-like
+// colour segmentation of the box against a ring around it), so the shape stages see the
+// object's outline, not a rectangle. Refinement costs about as much per box as the model per
+// frame, so at most `maxRefined` boxes a frame are refined, the highest scores first; the rest
+// (and every box with `refine: false`) keep their filled box.
 
 import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchors, toInput, toPixels } from './ssd-decode.js';
 
@@ -17,7 +21,9 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  * @typedef {import('../detectors.js').Detector} Detector
  * @typedef {import('../detectors.js').DetectorFrame} DetectorFrame
  * @typedef {import('../detectors.js').MaskInput} MaskInput
+ * @typedef {import('../detectors.js').BoxInput} BoxInput
  * @typedef {import('virtual:shapetrack-ssd').TfliteModelRunner} TfliteModelRunner
+ * @typedef {import('../../lib/core.js').Core} Core
  *
  * @typedef {{
  *   movingCamera?: boolean,
@@ -25,10 +31,22 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   minFill?: number,
  *   perClassNms?: boolean,
  *   background?: import('../../../pkg/shapetrack.js').BackgroundSettings,
+ *   refine?: boolean | import('../../../pkg/shapetrack.js').RefineSettings,
+ *   maxRefined?: number,
  * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
- *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the box
- *   is filled (default 0.2); `perClassNms`: suppress overlaps only within a class
+ *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the
+ *   background subtractor's mask is not used (default 0.2); `perClassNms`: suppress overlaps
+ *   only within a class; `refine`: refine boxes into masks (default true; an object gives
+ *   `RefineConfig` settings, `false` keeps filled boxes); `maxRefined`: most boxes refined per
+ *   frame (default MAX_REFINED)
  */
+
+/**
+ * Most boxes refined per frame by default, the highest scores first: as many as the
+ * moving-camera detector refines blobs (`MovingConfig::max_blobs`), which bounds a frame's
+ * cost whatever the scene holds (MediaPipe keeps up to 100 boxes).
+ */
+export const MAX_REFINED = 4;
 
 /** Side of the model's square input. */
 const INPUT = 300;
@@ -138,8 +156,14 @@ export function ssdDetector(options = {}) {
   const moving = options.movingCamera === true;
   const minScore = options.minScore ?? 0.3;
   const minFill = options.minFill ?? 0.2;
+  const maxRefined = options.maxRefined ?? MAX_REFINED;
+  if (!(Number.isInteger(maxRefined) && maxRefined >= 0)) throw new Error(`SSD detector: maxRefined must be a whole number ≥ 0, not ${maxRefined}`);
   /** @type {LoadedModel | null} */
   let model = null;
+  /** @type {Core | null} */
+  let wasm = null;
+  /** @type {import('../../../pkg/shapetrack.js').BoxRefiner | null} */
+  let refiner = null;
   /** @type {import('../../../pkg/shapetrack.js').BackgroundDetector | null} */
   let bg = null;
   /** @type {OffscreenCanvasRenderingContext2D | null} */
@@ -188,6 +212,10 @@ export function ssdDetector(options = {}) {
       if (!moving) {
         bg = new core.BackgroundDetector(options.background);
       }
+      wasm = core;
+      if (options.refine !== false) {
+        refiner = new core.BoxRefiner(typeof options.refine === 'object' ? options.refine : undefined);
+      }
     },
     detect(frame) {
       if (!model) throw new Error('SSD detector used before init');
@@ -209,17 +237,31 @@ export function ssdDetector(options = {}) {
       }
       /** @type {MaskInput[]} */
       const masks = [];
+      /** @type {BoxInput[]} */
+      const boxes = [];
       for (const c of kept) {
         const box = toPixels(c, frame.width, frame.height);
         if (!box) continue;
-        const { data } = maskInBox(fgImage, frame.width, box, minFill);
-        masks.push({ x: box.x, y: box.y, width: box.w, height: box.h, data, score: c.score, class: c.class });
+        const { data, filled } = maskInBox(fgImage, frame.width, box, minFill);
+        if (filled && refiner) boxes.push({ bbox: box, score: c.score, class: c.class });
+        else masks.push({ x: box.x, y: box.y, width: box.w, height: box.h, data, score: c.score, class: c.class });
       }
-      return { masks };
+      if (!refiner || !wasm || boxes.length === 0) return { masks };
+      // In wasm memory from here: the refined masks go to the tracker without crossing back.
+      const dets = wasm.Detections.fromLists({ masks, boxes });
+      try {
+        refiner.refine(frame.buffer, dets, maxRefined);
+      } catch (e) {
+        dets.free();
+        throw e;
+      }
+      return dets;
     },
     dispose() {
       bg?.free();
       bg = null;
+      refiner?.free();
+      refiner = null;
     },
   };
   return detector;
