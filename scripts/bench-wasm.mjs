@@ -6,7 +6,12 @@
 // and its phases inside wasm. Rendering is not timed; the call into
 // wasm and the shapes coming back to JS are.
 //
-//   node scripts/bench-wasm.mjs --scene default [--pkg DIR]
+//   node scripts/bench-wasm.mjs --scene default [--pkg DIR] [--paired]
+//
+// `--paired` (what `shapetrack bench --wasm` runs): after the warm-up passes it prints
+// `{"ready":true,...}` and then runs one pass per line read on stdin, printing each pass's
+// JSON line, until stdin ends. The native side runs its own pass between two of ours, so both
+// sides are timed in the same moments of a shared machine's busy and quiet spells.
 //
 // `--pkg`: another build of the bindings than www/pkg, e.g. the one with function names for
 // profilers (`node scripts/build-wasm.mjs --profiling` writes target/pkg-profiling).
@@ -56,6 +61,7 @@ function pass() {
 }
 const cold = pass();
 cold.tracker.free();
+if (process.argv.includes('--paired')) await paired();
 let best = pass();
 let passes = 1;
 for (let spent = best.ms; passes < MIN_PASSES || spent < MIN_MS; passes++) {
@@ -80,3 +86,25 @@ const phases = {
   update: per(p.update),
 };
 console.log(JSON.stringify({ scene: name, width: scene.width, height: scene.height, frames: scene.frames, detections_per_frame: detections / scene.frames, ms_per_frame: ms / scene.frames, first_pass_ms_per_frame: cold.ms / scene.frames, passes, phases }));
+
+/** One pass per line on stdin (see the header); never returns. */
+async function paired() {
+  // TurboFan recompiles hot functions over the first passes: two more before the first timed.
+  for (let i = 0; i < 2; i++) pass().tracker.free();
+  const header = { scene: name, width: scene.width, height: scene.height, frames: scene.frames, first_pass_ms_per_frame: cold.ms / scene.frames };
+  console.log(JSON.stringify({ ready: true, ...header }));
+  const { createInterface } = await import('node:readline');
+  for await (const _line of createInterface({ input: process.stdin })) {
+    const p = pass();
+    const t = p.tracker.phaseTimes();
+    const per = (/** @type {number} */ v) => v / scene.frames;
+    console.log(
+      JSON.stringify({
+        ms_per_frame: p.ms / scene.frames,
+        phases: { features: per(t.features), regions: per(t.regions), costs: per(t.costs), assignment: per(t.assignment), update: per(t.update) },
+      }),
+    );
+    p.tracker.free();
+  }
+  process.exit(0);
+}
