@@ -206,6 +206,17 @@ impl BBox {
         self.w.max(0.0) * self.h.max(0.0)
     }
 
+    /// The part of the box inside a `img_w`×`img_h` image (a box of no size when it lies
+    /// outside): what to rasterise, so that a box of any size costs at most the image.
+    pub fn clipped(&self, img_w: u32, img_h: u32) -> BBox {
+        let (x0, y0) = (self.x.max(0.0), self.y.max(0.0));
+        let (x1, y1) = (
+            self.x2().min(f64::from(img_w)),
+            self.y2().min(f64::from(img_h)),
+        );
+        BBox::new(x0, y0, (x1 - x0).max(0.0), (y1 - y0).max(0.0))
+    }
+
     /// Area of the intersection with `other` (0 when disjoint).
     pub fn intersection_area(&self, other: &BBox) -> f64 {
         let iw = (self.x2().min(other.x2()) - self.x.max(other.x)).max(0.0);
@@ -1160,5 +1171,16 @@ mod tests {
             (1, 2, 3, 2, 6)
         );
         assert!(Mask::from_bbox(&BBox::new(1.0, 1.0, 0.2, 0.2)).is_empty());
+    }
+
+    #[test]
+    fn a_box_clipped_to_the_image_keeps_only_its_part_inside() {
+        let b = BBox::new(-1e9, 5.0, 3e9, 4.0).clipped(640, 480);
+        assert_eq!((b.x, b.y, b.w, b.h), (0.0, 5.0, 640.0, 4.0));
+        let outside = BBox::new(700.0, 10.0, 20.0, 20.0).clipped(640, 480);
+        assert_eq!(outside.area(), 0.0);
+        assert!(Mask::from_bbox(&outside).is_empty());
+        let inside = BBox::new(1.5, 2.5, 3.0, 4.0);
+        assert_eq!(inside.clipped(640, 480), inside);
     }
 }

@@ -1329,3 +1329,42 @@ fn add_uncovered_appends_only_what_the_list_does_not_hold() {
         assert!(msg.contains("covered"), "{bad}: {msg}");
     }
 }
+
+#[wasm_bindgen_test]
+fn boxes_of_any_size_are_compared_and_filled_without_rasterising_them_whole() {
+    // A JS detector may hand in a box far larger than the frame (a bug, a unit mix-up): it
+    // must cost at most the frame, never exhaust wasm memory.
+    let huge =
+        serde_json::json!({ "bbox": { "x": -1e9, "y": -1e9, "w": 3e9, "h": 3e9 }, "score": 0.5 });
+    let buf = FrameBuffer::new(16.0, 16.0).unwrap();
+    let mut dets = Detections::from_lists(ts(js(&serde_json::json!({ "boxes": [huge] })))).unwrap();
+    // Past the budget: its filled box, clipped to the frame.
+    assert_eq!(
+        BoxRefiner::new(None)
+            .unwrap()
+            .refine(&buf, &mut dets, Some(0))
+            .unwrap(),
+        0
+    );
+    let listed: Vec<Listed> =
+        serde_wasm_bindgen::from_value(dets.to_list().unwrap().into()).unwrap();
+    let m = listed[0].mask.as_ref().expect("a mask");
+    assert_eq!((m.x, m.y, m.width, m.height, m.area()), (0, 0, 16, 16, 256));
+
+    // A small mask inside a huge box is held by it; a huge box is not held by a small mask.
+    let small = serde_json::json!({ "x": 5, "y": 5, "width": 2, "height": 2, "data": [1, 1, 1, 1], "score": 0.9 });
+    let mut own = Detections::from_lists(ts(js(&serde_json::json!({ "boxes": [huge] })))).unwrap();
+    let other = Detections::from_lists(ts(js(&serde_json::json!({ "masks": [small] })))).unwrap();
+    assert_eq!(own.add_uncovered(&other, 0.5).unwrap(), 0);
+    let mut own = Detections::from_lists(ts(js(&serde_json::json!({ "masks": [small] })))).unwrap();
+    let other = Detections::from_lists(ts(js(&serde_json::json!({ "boxes": [huge] })))).unwrap();
+    assert_eq!(own.add_uncovered(&other, 0.5).unwrap(), 1);
+    // Two boxes: a 10×10 box half on another.
+    let a = serde_json::json!({ "boxes": [{ "bbox": { "x": 0, "y": 0, "w": 10, "h": 10 } }] });
+    let b = serde_json::json!({ "boxes": [{ "bbox": { "x": 5, "y": 0, "w": 10, "h": 10 } }] });
+    let b = Detections::from_lists(ts(js(&b))).unwrap();
+    let mut held = Detections::from_lists(ts(js(&a))).unwrap();
+    assert_eq!(held.add_uncovered(&b, 0.5).unwrap(), 0);
+    let mut kept = Detections::from_lists(ts(js(&a))).unwrap();
+    assert_eq!(kept.add_uncovered(&b, 0.51).unwrap(), 1);
+}

@@ -758,8 +758,9 @@ impl BoxRefiner {
     /// Refines every detection of `dets` in place (masks replace filled boxes).
     pub fn refine_all(&self, frame: &Frame, dets: &mut [Detection]) -> Result<(), DetectError> {
         for d in dets.iter_mut() {
+            // Clipped before it is rasterised: a box of any size costs at most the frame.
             let m = refine_box(frame, &d.bbox, &self.cfg)?
-                .unwrap_or_else(|| Mask::from_bbox(&d.bbox).clipped(frame.width(), frame.height()));
+                .unwrap_or_else(|| Mask::from_bbox(&d.bbox.clipped(frame.width(), frame.height())));
             if !m.is_empty() {
                 d.bbox = m.bbox();
                 d.mask = Some(m);

@@ -368,7 +368,7 @@ test('bad files are refused with a message, not a crash', async () => {
 // 736 → 744 KB with the bench page's sized scene and the offline snapshots' deferred
 // downscaling (739 KiB then); 744 → 756 KB with the offline pass's box smoother and its
 // settings (753 KiB then); 756 → 760 KB with the box → mask refinement of the SSD's boxes
-// (`BoxRefiner`, its settings) and `Detections.addUncovered` (754.2 → 757.3 KiB).
+// (`BoxRefiner`, its settings) and `Detections.addUncovered` (754.2 → 757.8 KiB).
 test('wasm is at most 760 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
