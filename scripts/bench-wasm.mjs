@@ -75,17 +75,18 @@ for (let spent = best.ms; passes < MIN_PASSES || spent < MIN_MS; passes++) {
   }
 }
 const { ms, detections, tracker } = best;
-// The tracker's own phases inside wasm (milliseconds per frame), beside the native ones.
-const p = tracker.phaseTimes();
-const per = (/** @type {number} */ v) => v / scene.frames;
-const phases = {
-  features: per(p.features),
-  regions: per(p.regions),
-  costs: per(p.costs),
-  assignment: per(p.assignment),
-  update: per(p.update),
-};
+const phases = phasesOf(tracker);
 console.log(JSON.stringify({ scene: name, width: scene.width, height: scene.height, frames: scene.frames, detections_per_frame: detections / scene.frames, ms_per_frame: ms / scene.frames, first_pass_ms_per_frame: cold.ms / scene.frames, passes, phases }));
+
+/**
+ * The tracker's own phases inside wasm (milliseconds per frame), beside the native ones.
+ * @param {import('../www/pkg/shapetrack.js').Tracker} tracker
+ */
+function phasesOf(tracker) {
+  const p = tracker.phaseTimes();
+  const per = (/** @type {number} */ v) => v / scene.frames;
+  return { features: per(p.features), regions: per(p.regions), costs: per(p.costs), assignment: per(p.assignment), update: per(p.update) };
+}
 
 /** One pass per line on stdin (see the header); never returns. */
 async function paired() {
@@ -96,14 +97,7 @@ async function paired() {
   const { createInterface } = await import('node:readline');
   for await (const _line of createInterface({ input: process.stdin })) {
     const p = pass();
-    const t = p.tracker.phaseTimes();
-    const per = (/** @type {number} */ v) => v / scene.frames;
-    console.log(
-      JSON.stringify({
-        ms_per_frame: p.ms / scene.frames,
-        phases: { features: per(t.features), regions: per(t.regions), costs: per(t.costs), assignment: per(t.assignment), update: per(t.update) },
-      }),
-    );
+    console.log(JSON.stringify({ ms_per_frame: p.ms / scene.frames, phases: phasesOf(p.tracker) }));
     p.tracker.free();
   }
   process.exit(0);

@@ -15,8 +15,9 @@
 //! let gt = vec![Record::from_box(1, 1, BBox::new(0.0, 0.0, 10.0, 10.0))];
 //! let res = gt.clone();
 //! let seqs = [SequenceInput::new("s", 1, gt, res)];
-//! let r = evaluate(&seqs, &EvalConfig::default()).unwrap();
+//! let r = evaluate(&seqs, &EvalConfig::default())?;
 //! assert_eq!(r.summary().combined.hota, 100.0);
+//! # Ok::<(), shapetrack::eval::EvalError>(())
 //! ```
 //!
 //! [`Record`]: crate::io::Record

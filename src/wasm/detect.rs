@@ -4,8 +4,8 @@
 
 use super::*;
 use crate::detect::{
-    refine_box, BackgroundSubtractor, CameraJudge as CoreJudge, DetectError, Detector,
-    MovingCameraDetector, RefineConfig,
+    BackgroundSubtractor, BoxRefiner as CoreRefiner, CameraJudge as CoreJudge, DetectError,
+    Detector, MovingCameraDetector,
 };
 use crate::frame::{BBox, Detection, Mask};
 use serde::{Deserialize, Serialize};
@@ -369,7 +369,7 @@ impl MovingDetector {
 /// bound on each box's cost). No model weights.
 #[wasm_bindgen]
 pub struct BoxRefiner {
-    cfg: RefineConfig,
+    inner: CoreRefiner,
 }
 
 #[wasm_bindgen]
@@ -378,8 +378,9 @@ impl BoxRefiner {
     /// missing ones keep their defaults, unknown or out-of-range ones are errors).
     #[wasm_bindgen(constructor)]
     pub fn new(config: Option<RefineSettings>) -> Result<BoxRefiner, JsValue> {
+        let cfg = settings::refine_config(config.as_ref())?;
         Ok(BoxRefiner {
-            cfg: settings::refine_config(config.as_ref())?,
+            inner: CoreRefiner::new(cfg).map_err(js_error)?,
         })
     }
 
@@ -397,46 +398,11 @@ impl BoxRefiner {
         max: Option<u32>,
     ) -> Result<u32, JsValue> {
         let frame = buf.frame()?;
-        // The `max` highest-scoring box-only detections (equal scores: the detector's order),
-        // picked by repeated scans rather than a sort: `max` is a handful and a frame holds
-        // at most a few hundred boxes, and a sort by a closure costs the module 7 KB.
-        let budget = max.map_or(usize::MAX, |m| m as usize);
-        let mut chosen = vec![false; dets.inner.len()];
-        for _ in 0..budget.min(dets.inner.len()) {
-            let mut best: Option<(usize, f64)> = None;
-            for (i, d) in dets.inner.iter().enumerate() {
-                let free = d.mask.is_none() && !chosen.get(i).copied().unwrap_or(true);
-                if free && best.is_none_or(|(_, s)| d.score > s) {
-                    best = Some((i, d.score));
-                }
-            }
-            match best.and_then(|(i, _)| chosen.get_mut(i)) {
-                Some(c) => *c = true,
-                None => break,
-            }
-        }
-        let mut refined = 0u32;
-        for (d, &pick) in dets.inner.iter_mut().zip(&chosen) {
-            if d.mask.is_some() {
-                continue;
-            }
-            let found = if pick {
-                refine_box(&frame, &d.bbox, &self.cfg).map_err(js_error)?
-            } else {
-                None
-            };
-            if found.is_some() {
-                refined += 1;
-            }
-            // Clipped before it is rasterised: a box of any size costs at most the frame.
-            let mask = found
-                .unwrap_or_else(|| Mask::from_bbox(&d.bbox.clipped(frame.width(), frame.height())));
-            if !mask.is_empty() {
-                d.bbox = mask.bbox();
-                d.mask = Some(mask);
-            }
-        }
-        Ok(refined)
+        let refined = self
+            .inner
+            .refine_all(&frame, &mut dets.inner, max.map(|m| m as usize))
+            .map_err(js_error)?;
+        Ok(u32::try_from(refined).unwrap_or(u32::MAX))
     }
 }
 

@@ -199,11 +199,10 @@ pub(super) fn moving_config(v: Option<&MovingSettings>) -> Result<MovingConfig, 
     overlay(MovingConfig::default(), v.map(|v| v.as_ref()))
 }
 
-/// The box → mask refinement's config from its settings object (validated).
+/// The box → mask refinement's config from its settings object (the core's `BoxRefiner`
+/// validates it).
 pub(super) fn refine_config(v: Option<&RefineSettings>) -> Result<RefineConfig, JsValue> {
-    let cfg = overlay(RefineConfig::default(), v.map(|v| v.as_ref()))?;
-    cfg.validate().map_err(js_error)?;
-    Ok(cfg)
+    overlay(RefineConfig::default(), v.map(|v| v.as_ref()))
 }
 
 /// The follower's config from its settings object.

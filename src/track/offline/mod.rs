@@ -440,15 +440,16 @@ fn relink_measured(
 /// use shapetrack::track::offline::{OfflineConfig, OfflineTracker};
 /// use shapetrack::{BBox, Detection};
 ///
-/// let mut t = OfflineTracker::new(OfflineConfig::default(), 25.0).unwrap();
+/// let mut t = OfflineTracker::new(OfflineConfig::default(), 25.0)?;
 /// for k in 0..10 {
 ///     let det = Detection::from_box(BBox::new(10.0 + 3.0 * k as f64, 20.0, 30.0, 60.0), 0.99);
-///     t.push_frame(None, &[det]).unwrap();
+///     t.push_frame(None, &[det])?;
 /// }
 /// let mut phases = Vec::new();
-/// let out = t.finish(|p| phases.push(p.phase)).unwrap();
+/// let out = t.finish(|p| phases.push(p.phase))?;
 /// assert_eq!(out.shapes.len(), 10);
 /// assert!(out.shapes.iter().all(|s| s.id == 1));
+/// # Ok::<(), shapetrack::track::offline::OfflineError>(())
 /// ```
 pub struct OfflineTracker<H: History = Vec<TrackedShape>> {
     config: OfflineConfig,

@@ -242,9 +242,11 @@ export function ssdDetector(options = {}) {
       for (const c of kept) {
         const box = toPixels(c, frame.width, frame.height);
         if (!box) continue;
-        const { data, filled } = maskInBox(fgImage, frame.width, box, minFill);
-        if (filled && refiner) boxes.push({ bbox: box, score: c.score, class: c.class });
-        else masks.push({ x: box.x, y: box.y, width: box.w, height: box.h, data, score: c.score, class: c.class });
+        // The foreground's mask when it fills enough of the box; else the box goes to the
+        // refiner (without a foreground image, straight there: no filled bitmap to build).
+        const m = fgImage || !refiner ? maskInBox(fgImage, frame.width, box, minFill) : null;
+        if (refiner && (!m || m.filled)) boxes.push({ bbox: box, score: c.score, class: c.class });
+        else if (m) masks.push({ x: box.x, y: box.y, width: box.w, height: box.h, data: m.data, score: c.score, class: c.class });
       }
       if (!refiner || !wasm || boxes.length === 0) return { masks };
       // In wasm memory from here: the refined masks go to the tracker without crossing back.
