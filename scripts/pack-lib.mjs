@@ -31,7 +31,7 @@ manifest.version = version;
 for (const f of manifest.files) {
   const from = f.startsWith('pkg/') ? join(PKG, f.slice(4)) : join(ROOT, 'lib', f);
   if (!existsSync(from)) throw new Error(`${from} is missing (the package lists it)`);
-  cpSync(from, join(stage, f));
+  cpSync(from, join(stage, f), { recursive: true });
 }
 writeFileSync(join(stage, 'package.json'), `${JSON.stringify(manifest, null, 2)}\n`);
 

@@ -616,6 +616,117 @@ fn tracker_keeps_ids_on_the_scene_masks_and_refuses_out_of_order_frames() {
 }
 
 #[wasm_bindgen_test]
+fn update_returns_each_shape_with_the_shape_types_keys_and_the_records_values() {
+    let keys = |v: &JsValue| -> Vec<String> {
+        js_sys::Object::keys(v.unchecked_ref::<js_sys::Object>())
+            .iter()
+            .map(|k| k.as_string().unwrap())
+            .collect()
+    };
+    let mut s = scene("default");
+    let mut buf = FrameBuffer::new(f64::from(s.width()), f64::from(s.height())).unwrap();
+    let mut tracker = Tracker::new(None, None).unwrap();
+    let mut returned: Vec<serde_json::Value> = Vec::new();
+    for n in 1..=12 {
+        let f = s.render(f64::from(n), &mut buf).unwrap();
+        let shapes = JsValue::from(tracker.update(f64::from(n), &buf, &f.detections()).unwrap());
+        assert!(js_sys::Array::is_array(&shapes));
+        for sh in js_sys::Array::from(&shapes).iter() {
+            // The keys of `Shape`, in its order (what JSON exports of update's output show).
+            let want = [
+                "frame",
+                "id",
+                "bbox",
+                "score",
+                "class",
+                "mask",
+                "interpolated",
+                "state",
+                "centroid",
+                "cost",
+            ];
+            assert_eq!(keys(&sh), want);
+            let get = |k: &str| js_sys::Reflect::get(&sh, &k.into()).unwrap();
+            assert_eq!(keys(&get("bbox")), ["x", "y", "w", "h"]);
+            assert_eq!(keys(&get("centroid")), ["x", "y"]);
+            assert_eq!(keys(&get("mask")), ["size", "counts"]);
+            returned.push(serde_wasm_bindgen::from_value(sh).unwrap());
+        }
+    }
+    assert!(returned.len() >= 12 * 5, "{} shapes", returned.len());
+    // Every value is the one the tracker keeps: the records of the same frame and id.
+    let records = records_of(tracker.tracks().unwrap());
+    let states = ["tentative", "confirmed", "lost", "removed"];
+    let (mut confirmed, mut detected) = (0, 0);
+    for sh in &returned {
+        let (frame, id) = (sh["frame"].as_u64().unwrap(), sh["id"].as_i64().unwrap());
+        let r = records
+            .iter()
+            .find(|r| u64::from(r.frame) == frame && r.id == id)
+            .unwrap_or_else(|| panic!("no record for {sh}"));
+        let b = &sh["bbox"];
+        let bbox = [&b["x"], &b["y"], &b["w"], &b["h"]].map(|v| v.as_f64().unwrap());
+        assert_eq!(bbox, [r.bbox.x, r.bbox.y, r.bbox.w, r.bbox.h], "{sh}");
+        assert_eq!(sh["score"].as_f64().unwrap(), r.score, "{sh}");
+        assert_eq!(sh["class"].as_i64().unwrap(), i64::from(r.class), "{sh}");
+        let m = r.mask.as_ref().unwrap();
+        assert_eq!(sh["mask"]["counts"].as_str().unwrap(), m.counts, "{sh}");
+        assert_eq!(sh["mask"]["size"], serde_json::json!(m.size), "{sh}");
+        assert_eq!(sh["interpolated"], r.interpolated, "{sh}");
+        detected += usize::from(sh["interpolated"] == false);
+        assert!(states.contains(&sh["state"].as_str().unwrap()), "{sh}");
+        confirmed += usize::from(sh["state"] == "confirmed");
+        let (cx, cy) = (sh["centroid"]["x"].as_f64(), sh["centroid"]["y"].as_f64());
+        assert!(
+            cx.is_some_and(|x| x > r.bbox.x && x < r.bbox.x + r.bbox.w),
+            "{sh}"
+        );
+        assert!(
+            cy.is_some_and(|y| y > r.bbox.y && y < r.bbox.y + r.bbox.h),
+            "{sh}"
+        );
+        assert!(sh["cost"].as_f64().is_some_and(f64::is_finite), "{sh}");
+    }
+    assert!(
+        confirmed * 2 > returned.len(),
+        "mostly confirmed: {confirmed}"
+    );
+    assert!(detected * 2 > returned.len(), "mostly detected: {detected}");
+    // Two shapes' masks differ (each one gets its own part of the counts).
+    let first = &returned[0]["mask"]["counts"];
+    assert!(returned.iter().any(|sh| &sh["mask"]["counts"] != first));
+
+    // Box detections without pixels: no `mask` key at all (not `undefined`).
+    let mut boxes = Tracker::new(None, None).unwrap();
+    for n in 1..=3 {
+        let x = 10.0 + 2.0 * f64::from(n);
+        let lists = serde_json::json!({
+            "boxes": [{ "bbox": { "x": x, "y": 20, "w": 30, "h": 40 }, "score": 0.9, "class": 2 }],
+        });
+        let dets = Detections::from_lists(ts(js(&lists))).unwrap();
+        let shapes = JsValue::from(boxes.update_detections(f64::from(n), &dets).unwrap());
+        for sh in js_sys::Array::from(&shapes).iter() {
+            let want = [
+                "frame",
+                "id",
+                "bbox",
+                "score",
+                "class",
+                "interpolated",
+                "state",
+                "centroid",
+                "cost",
+            ];
+            assert_eq!(keys(&sh), want);
+            let v: serde_json::Value = serde_wasm_bindgen::from_value(sh).unwrap();
+            assert_eq!(v["frame"], n);
+            assert_eq!(v["class"], 2);
+            assert_eq!(v["score"], 0.9);
+        }
+    }
+}
+
+#[wasm_bindgen_test]
 fn detections_from_js_lists_are_checked() {
     let ok = serde_json::json!({
         "boxes": [{ "bbox": { "x": 1, "y": 2, "w": 3, "h": 4 }, "score": 0.5 }],

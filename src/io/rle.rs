@@ -211,7 +211,18 @@ impl Rle {
     /// the image width plus the mask's area, not to the image's area (this runs for every shape
     /// of every exported frame).
     pub fn from_mask(mask: &Mask, width: u32, height: u32) -> Rle {
-        let mut counts = Vec::new();
+        let (w, h) = (width as i64, height as i64);
+        let (mx0, my0) = (mask.x() as i64, mask.y() as i64);
+        let (mx1, my1) = (mx0 + mask.width() as i64, my0 + mask.height() as i64);
+        let (ya, yb) = (my0.clamp(0, h), my1.clamp(0, h));
+        let (xa, xb) = if ya < yb {
+            (mx0.clamp(0, w), mx1.clamp(0, w))
+        } else {
+            (w, w)
+        };
+        // About two runs a column for a solid shape (the background above and below meets
+        // the next column's): reserved once rather than grown a push at a time.
+        let mut counts = Vec::with_capacity(2 * (xb - xa) as usize + 2);
         let (mut prev, mut run) = (false, 0u32);
         let mut push = |v: bool, n: u32, prev: &mut bool, run: &mut u32| {
             if n == 0 {
@@ -223,15 +234,6 @@ impl Rle {
                 *prev = v;
             }
             *run += n;
-        };
-        let (w, h) = (width as i64, height as i64);
-        let (mx0, my0) = (mask.x() as i64, mask.y() as i64);
-        let (mx1, my1) = (mx0 + mask.width() as i64, my0 + mask.height() as i64);
-        let (ya, yb) = (my0.clamp(0, h), my1.clamp(0, h));
-        let (xa, xb) = if ya < yb {
-            (mx0.clamp(0, w), mx1.clamp(0, w))
-        } else {
-            (w, w)
         };
         // Whole columns left and right of the mask are one background run each side (an
         // image's pixel count fits u32: `io::limits`).
@@ -245,13 +247,15 @@ impl Rle {
         for x in xa..xb {
             push(false, ya as u32, &mut prev, &mut run);
             let col = (x - mx0) as usize;
-            let bit = |r: usize| bits.get((row0 + r) * stride + col).is_some_and(|&b| b != 0);
+            // Down the column a run at a time, the index moving a stride per pixel.
+            let mut i = row0 * stride + col;
             let mut r = 0;
             while r < rows {
-                let v = bit(r);
+                let v = bits.get(i).is_some_and(|&b| b != 0);
                 let start = r;
-                while r < rows && bit(r) == v {
+                while r < rows && bits.get(i).is_some_and(|&b| b != 0) == v {
                     r += 1;
+                    i += stride;
                 }
                 push(v, (r - start) as u32, &mut prev, &mut run);
             }

@@ -49,13 +49,19 @@ impl Sizes {
 
     /// The upper quartile of each of area, width and height over the window.
     pub(crate) fn reference(&self) -> (f64, (f64, f64)) {
+        // On the stack: this runs at every match of every track.
         let q = |k: usize| -> f64 {
-            let mut v: Vec<f64> = self.ring.iter().map(|r| r[k]).collect();
+            let mut buf = [0.0; Self::LEN];
+            let n = self.ring.len().min(Self::LEN);
+            for (d, r) in buf.iter_mut().zip(&self.ring) {
+                *d = r[k];
+            }
+            let v = &mut buf[..n];
             if v.is_empty() {
                 return 0.0;
             }
             v.sort_by(f64::total_cmp);
-            v[(3 * (v.len() - 1)) / 4]
+            v[(3 * (n - 1)) / 4]
         };
         (q(0), (q(1), q(2)))
     }

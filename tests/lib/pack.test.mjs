@@ -35,6 +35,8 @@ test('pack, install offline in an empty folder, run the README embedding, check 
   for (const f of ['index.js', 'index.d.ts', 'worker.js', 'worker.d.ts', 'tracker-worker.js', 'pkg/shapetrack.js', 'pkg/shapetrack_bg.wasm', 'package.json', 'README.md']) {
     assert.ok(listing.includes(`package/${f}`), `${f} is in the tarball`);
   }
+  // The bindings' JS snippets (`inline_js`): shapetrack.js imports them.
+  assert.ok(listing.some((f) => /^package\/pkg\/snippets\/.+\.js$/.test(f)), 'the wasm-bindgen snippets are in the tarball');
   assert.ok(!listing.some((f) => f.includes('node_modules') || f.includes('target/')), 'no build outputs besides the module');
 
   const app = join(work, 'app');
