@@ -338,7 +338,7 @@ fn online_error(e: OfflineError) -> JsValue {
 /// The shapes one update reports, as JS sees them: the objects `ts(&Shapes(..))` would give,
 /// key for key, built in JS from one array of numbers and one string of every mask's counts.
 /// serde-wasm-bindgen sets each field with its own call out of wasm and decodes each counts
-/// string on its own: that was a tenth of `update`'s time in Node on a 5-shape scene (the
+/// string on its own: 7–10 % of `update`'s time in Node on the demo and occlusion scenes (the
 /// profile of `tracker_update`), where the native tracker has nothing to convert. One JSON
 /// string parsed in JS was slower still (stop 48).
 fn shapes_js(shapes: &[RleShape]) -> Result<Ts<Shapes>, JsValue> {
