@@ -293,8 +293,10 @@ fn grid_sample(
     spacing: f64,
 ) -> ColorSample {
     let (nx, ny) = ((w / spacing).ceil() as usize, (h / spacing).ceil() as usize);
-    let mut positions = Vec::new();
-    let mut rgb = Vec::new();
+    // At most one sample per grid point and per foreground pixel: reserved once.
+    let cap = nx.saturating_mul(ny).min(mask.area() as usize);
+    let mut positions = Vec::with_capacity(cap);
+    let mut rgb = Vec::with_capacity(cap);
     for j in 0..ny {
         let py = (y0 + (j as f64 + 0.5) * spacing).floor();
         for i in 0..nx {

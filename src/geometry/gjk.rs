@@ -66,7 +66,7 @@ impl PreparedShell {
                 // No vertex removal here: parry's `from_convex_polyline` drops vertices whose
                 // edges turn by less than ~1.5° (its f32 epsilon), which can shave a pixel off
                 // a long edge; our hull already has no collinear vertex.
-                _ => match ConvexPolygon::from_convex_polyline_unmodified(local.clone()) {
+                _ => match ConvexPolygon::from_convex_polyline_unmodified(local) {
                     Some(p) => Local::Polygon(p),
                     None => Local::Unrepresentable,
                 },
