@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::frame::{BBox, Frame, Mask, Point};
-use crate::io::{PackedRle, Rle};
+use crate::io::Rle;
 use serde::{Deserialize, Serialize};
 use tsify::{Ts, Tsify};
 use wasm_bindgen::prelude::*;
@@ -147,17 +147,6 @@ impl From<&Rle> for RleJs {
         RleJs {
             size: [r.height, r.width],
             counts: r.to_compressed(),
-        }
-    }
-}
-
-/// The kept string as it is (unpacking and compressing again gives the same string).
-impl From<&PackedRle> for RleJs {
-    fn from(p: &PackedRle) -> Self {
-        let (width, height) = p.size();
-        RleJs {
-            size: [height, width],
-            counts: p.compressed().to_string(),
         }
     }
 }
