@@ -53,6 +53,27 @@ function once(video, type, timeoutMs = 10000) {
 }
 
 /**
+ * Resolves once the video presents its next frame (requestVideoFrameCallback), or after
+ * `timeoutMs`, or at once where the browser lacks the callback.
+ * @param {HTMLVideoElement} video
+ * @param {number} timeoutMs
+ * @returns {Promise<void>}
+ */
+function framePresented(video, timeoutMs) {
+  if (!('requestVideoFrameCallback' in video)) return Promise.resolve();
+  return new Promise((resolve) => {
+    const handle = video.requestVideoFrameCallback(() => {
+      clearTimeout(timer);
+      resolve();
+    });
+    const timer = setTimeout(() => {
+      video.cancelVideoFrameCallback(handle);
+      resolve();
+    }, timeoutMs);
+  });
+}
+
+/**
  * The frame rate of a video, from the media times of a few decoded frames (browsers do not
  * expose it). Falls back to 25 when the browser lacks requestVideoFrameCallback.
  * @param {HTMLVideoElement} video
@@ -104,9 +125,18 @@ export async function videoSource(video, file) {
       // neighbour.
       const t = (n - 0.5) / fps;
       if (Math.abs(video.currentTime - t) > 1e-4) {
+        // 'seeked' says the position changed, not that the sought frame reached the
+        // compositor: on a busy machine Chromium can still hand createImageBitmap the frame
+        // shown before the seek (a backward follow then saw one picture over and over). The
+        // video-frame callback fires once the new frame is presented; the timeout keeps a
+        // browser that skips it for a paused, hidden element from stalling. The price is a
+        // display frame per seek (headless Chromium: ~16.7 ms against ~4 ms), so a video file
+        // is read at up to ~60 frames a second: wrong pixels are worse than a slower read.
+        const presented = framePresented(video, 500);
         const seeked = once(video, 'seeked');
         video.currentTime = t;
         await seeked;
+        await presented;
       }
       return createImageBitmap(video);
     },
