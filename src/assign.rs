@@ -261,12 +261,41 @@ pub fn solve_sparse(
     for &(r, c, _) in edges {
         dsu.join(r, rows + c);
     }
+    // Edges per component (by root): a component of one edge, a track with its only
+    // detection, is decided here, without the matrix, index lists and solver allocations
+    // each component costs (most components in a sparse scene; issue 10).
+    let mut edges_of_root = vec![0usize; rows + cols];
+    for &(r, _, _) in edges {
+        let root = dsu.find(r);
+        edges_of_root[root] += 1;
+    }
+    let mut out = Assignment::default();
+    let mut row_used = vec![false; rows];
+    let mut col_used = vec![false; cols];
     // Components in order of first appearance; local indices within each.
     let mut comp_of_root = vec![usize::MAX; rows + cols];
     let mut local = vec![usize::MAX; rows + cols];
     let mut comps: Vec<Component> = Vec::new();
     for &(r, c, v) in edges {
         let root = dsu.find(r);
+        if edges_of_root[root] == 1 {
+            // As the solvers decide a 1×1 component: matched at any cost, or when that
+            // beats leaving both out.
+            let matched = match policy {
+                Unmatched::MaxMatches => true,
+                Unmatched::Cost(l) => v < 2.0 * l,
+            };
+            if matched {
+                row_used[r] = true;
+                col_used[c] = true;
+                out.matches.push(Match {
+                    row: r,
+                    col: c,
+                    cost: v,
+                });
+            }
+            continue;
+        }
         if comp_of_root[root] == usize::MAX {
             comp_of_root[root] = comps.len();
             comps.push((Vec::new(), Vec::new(), Vec::new()));
@@ -282,9 +311,6 @@ pub fn solve_sparse(
         }
         comp.2.push((local[r], local[rows + c], v));
     }
-    let mut out = Assignment::default();
-    let mut row_used = vec![false; rows];
-    let mut col_used = vec![false; cols];
     for (crows, ccols, cedges) in &comps {
         let mut m = CostMatrix::new(crows.len(), ccols.len());
         for &(i, j, v) in cedges {

@@ -10,6 +10,8 @@
 //! phase over the shells' bounding boxes sends only box-overlapping pairs to GJK; the result is
 //! identical (a pair whose boxes are apart by more than [`TOUCH_TOLERANCE`] cannot intersect).
 
+use std::borrow::Borrow;
+
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{overlapping_box_pairs, ConvexShell, PreparedShell, TOUCH_TOLERANCE};
@@ -65,7 +67,13 @@ pub fn swept_shell(shell: &ConvexShell, dx: f64, dy: f64, margin: f64) -> Convex
 
 /// The region clusters of `tracks` (shells already predicted and grown) against `dets`, with
 /// the sort-and-sweep broad phase. Deterministic: all lists are sorted as documented.
-pub fn region_clusters(tracks: &[ConvexShell], dets: &[ConvexShell]) -> RegionEstimate {
+///
+/// The shells may be owned or borrowed (`ConvexShell`, `&ConvexShell`, `Cow`): the tracker
+/// passes its detections' shells without copying them.
+pub fn region_clusters<T: Borrow<ConvexShell>, D: Borrow<ConvexShell>>(
+    tracks: &[T],
+    dets: &[D],
+) -> RegionEstimate {
     region_clusters_with(tracks, dets, BroadPhase::SortAndSweep)
 }
 
@@ -95,9 +103,9 @@ pub(crate) fn cap_candidates(
 }
 
 /// [`region_clusters`] with a chosen broad phase (both give the same result).
-pub fn region_clusters_with(
-    tracks: &[ConvexShell],
-    dets: &[ConvexShell],
+pub fn region_clusters_with<T: Borrow<ConvexShell>, D: Borrow<ConvexShell>>(
+    tracks: &[T],
+    dets: &[D],
     phase: BroadPhase,
 ) -> RegionEstimate {
     let pairs = intersecting_pairs(tracks, dets, phase);
@@ -105,13 +113,19 @@ pub fn region_clusters_with(
 }
 
 /// The sorted `(track, detection)` pairs whose shells intersect (parry2d GJK).
-pub fn intersecting_pairs(
-    tracks: &[ConvexShell],
-    dets: &[ConvexShell],
+pub fn intersecting_pairs<T: Borrow<ConvexShell>, D: Borrow<ConvexShell>>(
+    tracks: &[T],
+    dets: &[D],
     phase: BroadPhase,
 ) -> Vec<(usize, usize)> {
-    let pt: Vec<PreparedShell> = tracks.iter().map(PreparedShell::new).collect();
-    let pd: Vec<PreparedShell> = dets.iter().map(PreparedShell::new).collect();
+    let pt: Vec<PreparedShell> = tracks
+        .iter()
+        .map(|s| PreparedShell::new(s.borrow()))
+        .collect();
+    let pd: Vec<PreparedShell> = dets
+        .iter()
+        .map(|s| PreparedShell::new(s.borrow()))
+        .collect();
     let candidates: Vec<(usize, usize)> = match phase {
         BroadPhase::SortAndSweep => {
             // Empty shells have a zero box at the origin; keep them out of the sweep.

@@ -44,6 +44,30 @@ proptest! {
         }
     }
 
+    /// `moved_with` (the tracker's search shell in one buffer) gives, vertex for vertex, the
+    /// shell `translated` or `swept` and then `from_points` with the extra points give; the
+    /// moved shell alone when an extra point is not finite.
+    #[test]
+    fn moved_with_equals_moving_then_merging(
+        s in shell(),
+        dx in prop_oneof![-60.0..60.0f64, Just(f64::NAN), Just(1e-13)],
+        dy in -60.0..60.0f64,
+        sweep in any::<bool>(),
+        extra in prop::collection::vec((-100.0..100.0f64, -100.0..100.0f64), 0..5),
+        poison in any::<bool>(),
+    ) {
+        let o = s.vertices()[0];
+        let mut extra: Vec<Point> = extra.iter().map(|&(x, y)| Point::new(o.x + x, o.y + y)).collect();
+        if poison && !extra.is_empty() {
+            extra[0].x = f64::INFINITY;
+        }
+        let moved = if sweep { s.swept(dx, dy) } else { s.translated(dx, dy) };
+        let mut pts = moved.vertices().to_vec();
+        pts.extend_from_slice(&extra);
+        let expected = ConvexShell::from_points(&pts).unwrap_or(moved);
+        prop_assert_eq!(s.moved_with(dx, dy, sweep, &extra), expected);
+    }
+
     /// `grown(m)` contains the original shell and every point within distance `m` of it, is
     /// still convex and CCW, and overshoots by at most m·(1/cos(π/8) − 1).
     #[test]

@@ -19,12 +19,13 @@ use crate::frame::{BBox, Point};
 /// small whenever the shells are close enough to matter — as parry's relative pose. The f32
 /// error is then relative to the shells' sizes and separation, not to their position.
 #[derive(Debug, Clone)]
-pub struct PreparedShell {
+pub struct PreparedShell<'a> {
     origin: Point,
     aabb: BBox,
     shape: Local,
-    /// The f64 shell, for the exact fallback when the f32 conversion is unusable.
-    shell: ConvexShell,
+    /// The f64 shell, for the exact fallback when the f32 conversion is unusable: borrowed,
+    /// where a copy was one more allocation per shell and frame (issue 10).
+    shell: &'a ConvexShell,
 }
 
 #[derive(Debug, Clone)]
@@ -37,9 +38,10 @@ enum Local {
     Unrepresentable,
 }
 
-impl PreparedShell {
-    /// Converts `shell` (one allocation; reuse the result across queries).
-    pub fn new(shell: &ConvexShell) -> Self {
+impl<'a> PreparedShell<'a> {
+    /// Converts `shell` (its f32 vertices and parry's edge normals: two allocations; reuse the
+    /// result across queries).
+    pub fn new(shell: &'a ConvexShell) -> Self {
         let verts = shell.vertices();
         let origin = verts.first().copied().unwrap_or_default();
         let mut local: Vec<Vector> = Vec::with_capacity(verts.len());
@@ -76,7 +78,7 @@ impl PreparedShell {
             origin,
             aabb: shell.aabb(),
             shape,
-            shell: shell.clone(),
+            shell,
         }
     }
 
@@ -86,8 +88,8 @@ impl PreparedShell {
     }
 
     /// The f64 shell this was built from.
-    pub fn shell(&self) -> &ConvexShell {
-        &self.shell
+    pub fn shell(&self) -> &'a ConvexShell {
+        self.shell
     }
 
     fn support_map(&self) -> Option<&dyn SupportMap> {
@@ -115,7 +117,7 @@ impl PreparedShell {
             (Some(a), Some(b), Some(pos12)) => {
                 intersection_test_support_map_support_map(&pos12, a, b)
             }
-            _ => intersects_thesis(&self.shell, &other.shell),
+            _ => intersects_thesis(self.shell, other.shell),
         }
     }
 
@@ -134,7 +136,7 @@ impl PreparedShell {
             (Some(a), Some(b), Some(pos12)) => {
                 distance_support_map_support_map(&pos12, a, b) as f64
             }
-            _ => distance_exact(&self.shell, &other.shell),
+            _ => distance_exact(self.shell, other.shell),
         }
     }
 }

@@ -73,9 +73,9 @@ impl ConvexShell {
         {
             return Err(GeometryError::NonFinitePoint { x: p.x, y: p.y });
         }
-        Ok(Self {
-            vertices: convex_hull(points.to_vec()),
-        })
+        let mut vertices = points.to_vec();
+        hull_tail(&mut vertices, 0);
+        Ok(Self { vertices })
     }
 
     /// The box's four corners (a segment or point when the box is flat). Rejects invalid boxes.
@@ -109,21 +109,28 @@ impl ConvexShell {
     /// The shell moved by `(dx, dy)`. A non-finite offset is treated as zero: offsets come from
     /// motion prediction, and a diverged filter must not poison every later intersection test.
     pub fn translated(&self, dx: f64, dy: f64) -> ConvexShell {
+        let mut vertices = Vec::with_capacity(self.vertices.len());
+        self.translated_onto(dx, dy, &mut vertices);
+        ConvexShell { vertices }
+    }
+
+    /// Appends the vertices of [`ConvexShell::translated`] to `out` (no allocation of its
+    /// own: the per-frame search shells are built in one buffer, issue 10).
+    fn translated_onto(&self, dx: f64, dy: f64, out: &mut Vec<Point>) {
         let dx = if dx.is_finite() { dx } else { 0.0 };
         let dy = if dy.is_finite() { dy } else { 0.0 };
-        let moved: Vec<Point> = self
-            .vertices
+        let start = out.len();
+        out.extend(self.vertices.iter().map(|p| Point::new(p.x + dx, p.y + dy)));
+        if out[start..]
             .iter()
-            .map(|p| Point::new(p.x + dx, p.y + dy))
-            .collect();
-        if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            .all(|p| p.x.is_finite() && p.y.is_finite())
+        {
             // Translation keeps convexity, but rounding can make nearly collinear vertices
             // collinear; rebuilding the hull keeps the invariant exact.
-            ConvexShell {
-                vertices: convex_hull(moved),
-            }
+            hull_tail(out, start);
         } else {
-            self.clone()
+            out.truncate(start);
+            out.extend_from_slice(&self.vertices);
         }
     }
 
@@ -176,9 +183,8 @@ impl ConvexShell {
             }
         }
         if out.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
-            ConvexShell {
-                vertices: convex_hull(out),
-            }
+            hull_tail(&mut out, 0);
+            ConvexShell { vertices: out }
         } else {
             self.clone()
         }
@@ -187,12 +193,36 @@ impl ConvexShell {
     /// The convex hull of the shell and its copy moved by `(dx, dy)`: the area swept by a
     /// shape moving in a straight line, for gating shapes that moved more than their own size.
     pub fn swept(&self, dx: f64, dy: f64) -> ConvexShell {
-        let moved = self.translated(dx, dy);
-        let mut pts = self.vertices.clone();
-        pts.extend_from_slice(&moved.vertices);
-        ConvexShell {
-            vertices: convex_hull(pts),
+        let mut vertices = Vec::with_capacity(2 * self.vertices.len());
+        self.swept_onto(dx, dy, &mut vertices);
+        ConvexShell { vertices }
+    }
+
+    /// Appends the vertices of [`ConvexShell::swept`] to `out`.
+    fn swept_onto(&self, dx: f64, dy: f64, out: &mut Vec<Point>) {
+        let start = out.len();
+        out.extend_from_slice(&self.vertices);
+        self.translated_onto(dx, dy, out);
+        hull_tail(out, start);
+    }
+
+    /// The hull of this shell moved by `(dx, dy)` (swept along the move when `sweep`) and of
+    /// `extra` points: what [`ConvexShell::translated`] or [`ConvexShell::swept`] then
+    /// [`ConvexShell::from_points`] with `extra` give, vertex for vertex, with one allocation
+    /// where those calls made five (seven when swept). Falls back to the moved shell alone
+    /// when an `extra` point is not finite (as `from_points` would reject it).
+    pub fn moved_with(&self, dx: f64, dy: f64, sweep: bool, extra: &[Point]) -> ConvexShell {
+        let mut vertices = Vec::with_capacity(2 * self.vertices.len() + extra.len());
+        if sweep {
+            self.swept_onto(dx, dy, &mut vertices);
+        } else {
+            self.translated_onto(dx, dy, &mut vertices);
         }
+        if extra.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            vertices.extend_from_slice(extra);
+            hull_tail(&mut vertices, 0);
+        }
+        ConvexShell { vertices }
     }
 
     /// Axis-aligned bounding box (the zero box when empty).
@@ -344,9 +374,47 @@ pub(crate) fn point_segment_distance(p: Point, a: Point, b: Point) -> f64 {
 /// Andrew's monotone chain. Points must be finite. Returns the hull CCW (positive area) from the
 /// smallest `(x, y)`, without duplicate or collinear vertices; 0–2 points for degenerate input.
 pub(crate) fn convex_hull(mut pts: Vec<Point>) -> Vec<Point> {
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    monotone_chain(pts)
+    hull_tail(&mut pts, 0);
+    pts
+}
+
+thread_local! {
+    /// The monotone chain's output before it is copied back over its input: one buffer per
+    /// thread, reused by every hull, where each hull allocated its own (issue 10: the shells
+    /// the tracker builds every frame were a fifth of its allocations).
+    static CHAIN: std::cell::RefCell<Vec<Point>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Replaces `pts[start..]` by its convex hull ([`convex_hull`]'s, vertex for vertex), in place.
+fn hull_tail(pts: &mut Vec<Point>, start: usize) {
+    let tail = &mut pts[start..];
+    tail.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    // `Vec::dedup` on the tail alone.
+    let mut kept = 0;
+    for i in 0..tail.len() {
+        if i == 0 || tail[i] != tail[kept - 1] {
+            tail[kept] = tail[i];
+            kept += 1;
+        }
+    }
+    pts.truncate(start + kept);
+    if kept <= 2 {
+        return;
+    }
+    CHAIN.with(|chain| match chain.try_borrow_mut() {
+        Ok(mut hull) => {
+            monotone_chain_into(&pts[start..], &mut hull);
+            pts.truncate(start);
+            pts.extend_from_slice(&hull);
+        }
+        // Unreachable (no hull is built inside another); a fresh buffer keeps it correct.
+        Err(_) => {
+            let mut hull = Vec::new();
+            monotone_chain_into(&pts[start..], &mut hull);
+            pts.truncate(start);
+            pts.extend_from_slice(&hull);
+        }
+    });
 }
 
 /// The convex hull of points already sorted by `(x, y)` without repeats (Andrew's monotone
@@ -355,16 +423,23 @@ fn monotone_chain(pts: Vec<Point>) -> Vec<Point> {
     if pts.len() <= 2 {
         return pts;
     }
-    let mut hull: Vec<Point> = Vec::with_capacity(pts.len() + 1);
+    let mut hull: Vec<Point> = Vec::new();
+    monotone_chain_into(&pts, &mut hull);
+    hull
+}
+
+/// [`monotone_chain`] of `pts` (at least three) into `hull`, which is cleared first.
+fn monotone_chain_into(pts: &[Point], hull: &mut Vec<Point>) {
+    hull.clear();
+    hull.reserve(pts.len() + 1);
     // The lower chain left to right, then the upper one back: one generic function per
     // direction, where a boxed iterator cost two allocations and a dynamic call per point
     // (8 % of the native tracker's samples on the demo scene went to this function).
-    chain(&mut hull, pts.iter());
-    chain(&mut hull, pts.iter().rev());
+    chain(hull, pts.iter());
+    chain(hull, pts.iter().rev());
     if hull.len() == 2 && hull[0] == hull[1] {
         hull.truncate(1);
     }
-    hull
 }
 
 /// One chain of [`monotone_chain`], appended to `hull`.
@@ -397,20 +472,21 @@ pub fn pixel_hull(mask: &Mask) -> ConvexShell {
         return ConvexShell::empty();
     }
     let (x0, y0) = (f64::from(mask.x()), f64::from(mask.y()));
-    // Per corner height y: the leftmost and rightmost corner x, as transposed points (y, x).
-    let mut levels: Vec<(f64, f64, f64)> = Vec::with_capacity(mask.height() as usize + 1);
+    // Per corner height y: the leftmost and rightmost corner x, as two transposed points
+    // (y, l), (y, r) in one list, already sorted by (y, x).
+    let mut transposed: Vec<Point> = Vec::with_capacity(2 * mask.height() as usize + 2);
     // Comparisons, not `f64::min` / `max`: their NaN rules make them calls in wasm, and these
     // are whole numbers.
-    let mut level = |y: f64, l: f64, r: f64| match levels.last_mut() {
-        Some(last) if last.0 == y => {
-            if l < last.1 {
-                last.1 = l;
+    let mut level = |y: f64, l: f64, r: f64| match transposed.len() {
+        n if n >= 2 && transposed[n - 2].x == y => {
+            if l < transposed[n - 2].y {
+                transposed[n - 2].y = l;
             }
-            if r > last.2 {
-                last.2 = r;
+            if r > transposed[n - 1].y {
+                transposed[n - 1].y = r;
             }
         }
-        _ => levels.push((y, l, r)),
+        _ => transposed.extend([Point::new(y, l), Point::new(y, r)]),
     };
     for (ly, row) in mask.data().chunks_exact(w).enumerate() {
         let (Some(a), Some(b)) = (
@@ -424,18 +500,23 @@ pub fn pixel_hull(mask: &Mask) -> ConvexShell {
         level(y, l, r);
         level(y + 1.0, l, r);
     }
-    // Transposed, sorted by (y, x); a row's corners differ in x by at least 1: no repeats.
-    let transposed: Vec<Point> = levels
-        .iter()
-        .flat_map(|&(y, l, r)| [Point::new(y, l), Point::new(y, r)])
-        .collect();
-    // Transposing mirrors the plane: the chain comes back clockwise; reverse it, and start
-    // at the smallest (x, y) as `convex_hull` does.
-    let mut hull: Vec<Point> = monotone_chain(transposed)
-        .into_iter()
-        .rev()
-        .map(|p| Point::new(p.y, p.x))
-        .collect();
+    // A row's corners differ in x by at least 1: no repeats. Transposing mirrors the plane:
+    // the chain comes back clockwise; reverse it, and start at the smallest (x, y) as
+    // `convex_hull` does. The chain is built in the shared buffer, so the points and the
+    // hull are this function's only allocations (there were four).
+    let back =
+        |pts: &[Point]| -> Vec<Point> { pts.iter().rev().map(|p| Point::new(p.y, p.x)).collect() };
+    let mut hull = if transposed.len() <= 2 {
+        back(&transposed)
+    } else {
+        CHAIN.with(|chain| match chain.try_borrow_mut() {
+            Ok(mut chain) => {
+                monotone_chain_into(&transposed, &mut chain);
+                back(&chain)
+            }
+            Err(_) => back(&monotone_chain(transposed)),
+        })
+    };
     if let Some(first) = hull
         .iter()
         .enumerate()

@@ -358,7 +358,7 @@ pub(crate) fn score_edges(
         sub = Regions {
             pairs: kept.iter().map(|&k| regions.pairs[k]).collect(),
             pair_cluster: kept.iter().map(|&k| regions.pair_cluster[k]).collect(),
-            clusters: regions.clusters.clone(),
+            clusters: std::sync::Arc::clone(&regions.clusters),
         };
         &sub
     };

@@ -111,7 +111,8 @@ fn appearance_is_compared_only_where_it_could_change_a_preference() {
         clusters: vec![Cluster {
             tracks: vec![0, 1],
             dets: vec![0, 1, 2],
-        }],
+        }]
+        .into(),
     };
     let calls = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let mut m = CostModel::default();
@@ -162,7 +163,8 @@ fn prefilter_skips_the_expensive_terms_of_pairs_that_cannot_match() {
         clusters: vec![Cluster {
             tracks: vec![0],
             dets: vec![0, 1, 2],
-        }],
+        }]
+        .into(),
     };
     let calls = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let model = |prefilter: Option<f64>| {
@@ -300,7 +302,8 @@ fn a_gated_pair_skips_its_remaining_appearance() {
         clusters: vec![Cluster {
             tracks: vec![0],
             dets: vec![0],
-        }],
+        }]
+        .into(),
     };
     let (first, second) = (
         std::sync::Arc::new(AtomicUsize::new(0)),

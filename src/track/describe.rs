@@ -20,7 +20,6 @@ use super::associate::Edge;
 use super::lifecycle::Track;
 use crate::frame::{BBox, TrackState};
 use crate::geometry::overlapping_box_pairs;
-use crate::region::clusters_from_pairs;
 
 /// When a group of competing pairs is ambiguous (see [`ambiguous_detections`]).
 pub(crate) struct Ambiguity {
@@ -70,23 +69,37 @@ pub(crate) fn ambiguous_detections(
         }
     }
     let close = |b: &(f64, f64)| b.1.is_finite() && b.1 - b.0 < margin;
-    let groups = clusters_from_pairs(tracks.len(), num_dets, &pairs);
-    let mut want = vec![false; num_dets];
-    for g in &groups.clusters {
-        let ambiguous = g.tracks.iter().any(|&t| {
-            best_t.get(t).is_some_and(close)
-                || tracks.get(t).is_some_and(|t| t.state() == TrackState::Lost)
-        }) || g
-            .detections
-            .iter()
-            .any(|&d| best_d.get(d).is_some_and(close));
-        if ambiguous {
-            for &d in &g.detections {
-                if let Some(w) = want.get_mut(d) {
-                    *w = true;
-                }
-            }
+    // The groups are the connected components of `pairs` (tracks 0.., detections after
+    // them), found by union–find: only whether each group is ambiguous is needed, not its
+    // member lists (which cost two allocations per group and frame; issue 10).
+    let nt = tracks.len();
+    let mut parent: Vec<usize> = (0..nt + num_dets).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
         }
+        x
+    }
+    for &(t, d) in &pairs {
+        let (a, b) = (find(&mut parent, t), find(&mut parent, nt + d));
+        if a != b {
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut ambiguous = vec![false; nt + num_dets];
+    for &(t, d) in &pairs {
+        let track_says = best_t.get(t).is_some_and(close)
+            || tracks.get(t).is_some_and(|t| t.state() == TrackState::Lost);
+        if track_says || best_d.get(d).is_some_and(close) {
+            let root = find(&mut parent, t);
+            ambiguous[root] = true;
+        }
+    }
+    let mut want = vec![false; num_dets];
+    for &(_, d) in &pairs {
+        let root = find(&mut parent, nt + d);
+        want[d] = ambiguous[root];
     }
     want
 }

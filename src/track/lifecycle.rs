@@ -601,22 +601,26 @@ impl Track {
     pub(crate) fn search_shell(&self, factor: f64) -> ConvexShell {
         let p = self.predicted;
         let shift = self.predicted_shift();
+        let anchor;
         let base = match self.features.as_ref().and_then(|f| f.shell.as_deref()) {
-            Some(s) => s.clone(),
-            None => ConvexShell::from_bbox(&self.anchor).unwrap_or_default(),
+            Some(s) => s,
+            None => {
+                anchor = ConvexShell::from_bbox(&self.anchor).unwrap_or_default();
+                &anchor
+            }
         };
         let size = (p.w.max(1.0) * p.h.max(1.0)).sqrt();
         let fast = shift.x.hypot(shift.y) > FAST_MOTION * size;
-        let moved = if fast || self.misses > 0 {
-            base.swept(shift.x, shift.y)
+        let corners = if p.is_valid() {
+            p.corners()
         } else {
-            base.translated(shift.x, shift.y)
+            [Point::default(); 4]
         };
-        let mut pts = moved.vertices().to_vec();
-        if p.is_valid() {
-            pts.extend(p.corners());
-        }
-        let merged = ConvexShell::from_points(&pts).unwrap_or(moved);
+        let extra = if p.is_valid() { &corners[..] } else { &[] };
+        // Moved (or swept) and merged with the predicted box in one buffer: the same hull as
+        // `translated`/`swept` then `from_points`, with two allocations per track and frame
+        // instead of about nine (issue 10).
+        let merged = base.moved_with(shift.x, shift.y, fast || self.misses > 0, extra);
         merged.grown(factor * size)
     }
 }

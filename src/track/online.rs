@@ -391,11 +391,14 @@ impl Tracker {
             .iter()
             .map(|t| t.search_shell(self.margin_factor(t)))
             .collect();
-        let det_shells: Vec<ConvexShell> = dets
+        // Borrowed where the detection has its shell (no copy per detection and frame).
+        let det_shells: Vec<std::borrow::Cow<'_, ConvexShell>> = dets
             .iter()
             .map(|d| match &d.features.shell {
-                Some(s) => s.as_ref().clone(),
-                None => ConvexShell::from_bbox(&d.det.bbox).unwrap_or_default(),
+                Some(s) => std::borrow::Cow::Borrowed(s.as_ref()),
+                None => {
+                    std::borrow::Cow::Owned(ConvexShell::from_bbox(&d.det.bbox).unwrap_or_default())
+                }
             })
             .collect();
         Regions::from(region_clusters(&track_shells, &det_shells))

@@ -10,6 +10,8 @@
 //! The mask pipeline swaps [`estimate_regions`] for [`crate::region::region_clusters`] on
 //! convex shells (converted with `Regions::from`); the tracker only depends on [`Regions`].
 
+use std::sync::Arc;
+
 use crate::frame::BBox;
 use crate::region::cap_candidates;
 pub use crate::region::MAX_CANDIDATES;
@@ -30,8 +32,10 @@ pub struct Regions {
     pub pairs: Vec<(usize, usize)>,
     /// The cluster index of each pair (same order as `pairs`).
     pub pair_cluster: Vec<usize>,
-    /// Clusters with at least one pair, ordered by their smallest track index.
-    pub clusters: Vec<Cluster>,
+    /// Clusters with at least one pair, ordered by their smallest track index. Shared: the
+    /// association's subsets of the pairs keep the clusters, and a copy was two allocations
+    /// per cluster and frame (issue 10).
+    pub clusters: Arc<[Cluster]>,
 }
 
 impl From<crate::region::RegionEstimate> for Regions {
@@ -62,7 +66,8 @@ impl From<crate::region::RegionEstimate> for Regions {
                     tracks: c.tracks,
                     dets: c.detections,
                 })
-                .collect(),
+                .collect::<Vec<_>>()
+                .into(),
         }
     }
 }
@@ -145,7 +150,7 @@ pub fn estimate_regions(track_shells: &[BBox], det_shells: &[BBox]) -> Regions {
     Regions {
         pairs,
         pair_cluster,
-        clusters,
+        clusters: clusters.into(),
     }
 }
 
@@ -183,7 +188,7 @@ mod tests {
             // Every pair lies in its cluster, and clusters are disjoint.
             let mut seen_t = vec![false; t.len()];
             let mut seen_d = vec![false; d.len()];
-            for c in &r.clusters {
+            for c in r.clusters.iter() {
                 for &i in &c.tracks { prop_assert!(!seen_t[i]); seen_t[i] = true; }
                 for &j in &c.dets { prop_assert!(!seen_d[j]); seen_d[j] = true; }
             }
@@ -219,8 +224,8 @@ mod tests {
         let r = estimate_regions(&t, &d);
         assert_eq!(r.pairs, vec![(0, 0), (1, 0)]);
         assert_eq!(
-            r.clusters,
-            vec![Cluster {
+            r.clusters[..],
+            [Cluster {
                 tracks: vec![0, 1],
                 dets: vec![0]
             }]
