@@ -4,7 +4,8 @@
 //! not a timing — so a change that brings back per-track or per-pair allocations fails here.
 //!
 //! What still allocates per frame, by design: each detection's mask, shell and appearance (new
-//! data), each track's search shell, the clusters and the assignment's outputs.
+//! data), each track's search shell, the clusters' member lists, a few small tables per
+//! appearance comparison, and the outputs.
 
 #![cfg(not(target_arch = "wasm32"))]
 
