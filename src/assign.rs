@@ -186,22 +186,38 @@ impl Assignment {
 /// One connected component: its rows, its columns, and its edges in local indices.
 type Component = (Vec<usize>, Vec<usize>, Vec<(usize, usize, f64)>);
 
-/// Union–find over rows `0..r` and columns `r..r+c`, for the connected components.
-struct Dsu(Vec<usize>);
+/// Union–find (path halving) over `0..n`: here rows `0..r` and columns `r..r+c`, for the
+/// connected components; the tracker's ambiguity groups use it too.
+pub(crate) struct Dsu(Vec<usize>);
 
 impl Dsu {
-    fn find(&mut self, mut i: usize) -> usize {
+    /// `n` singletons.
+    pub(crate) fn new(n: usize) -> Self {
+        Self((0..n).collect())
+    }
+    /// The representative of `i`'s set.
+    pub(crate) fn find(&mut self, mut i: usize) -> usize {
         while self.0[i] != i {
             self.0[i] = self.0[self.0[i]];
             i = self.0[i];
         }
         i
     }
-    fn join(&mut self, a: usize, b: usize) {
+    /// Merges the sets of `a` and `b`.
+    pub(crate) fn join(&mut self, a: usize, b: usize) {
         let (ra, rb) = (self.find(a), self.find(b));
         if ra != rb {
             self.0[ra] = rb;
         }
+    }
+}
+
+/// Whether a component of one allowed pair (cost `v`) is matched under `policy`: always to
+/// maximise matches, else when that beats leaving both out (`v < 2λ`).
+fn lone_pair_matches(policy: Unmatched, v: f64) -> bool {
+    match policy {
+        Unmatched::MaxMatches => true,
+        Unmatched::Cost(l) => v < 2.0 * l,
     }
 }
 
@@ -257,7 +273,7 @@ pub fn solve_sparse(
             return Err(AssignError::NonFinite { row, col, value });
         }
     }
-    let mut dsu = Dsu((0..rows + cols).collect());
+    let mut dsu = Dsu::new(rows + cols);
     for &(r, c, _) in edges {
         dsu.join(r, rows + c);
     }
@@ -279,13 +295,7 @@ pub fn solve_sparse(
     for &(r, c, v) in edges {
         let root = dsu.find(r);
         if edges_of_root[root] == 1 {
-            // As the solvers decide a 1×1 component: matched at any cost, or when that
-            // beats leaving both out.
-            let matched = match policy {
-                Unmatched::MaxMatches => true,
-                Unmatched::Cost(l) => v < 2.0 * l,
-            };
-            if matched {
+            if lone_pair_matches(policy, v) {
                 row_used[r] = true;
                 col_used[c] = true;
                 out.matches.push(Match {
@@ -392,7 +402,7 @@ fn solve_with_unmatched_cost(
     if let ([r], [c]) = (rows, cols) {
         // One allowed pair: match it when that beats leaving both out.
         return Ok(match matrix.get(*r, *c) {
-            Some(v) if v < 2.0 * lambda => vec![(*r, *c)],
+            Some(v) if lone_pair_matches(Unmatched::Cost(lambda), v) => vec![(*r, *c)],
             _ => vec![],
         });
     }

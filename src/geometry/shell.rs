@@ -401,34 +401,24 @@ fn hull_tail(pts: &mut Vec<Point>, start: usize) {
     if kept <= 2 {
         return;
     }
-    CHAIN.with(|chain| match chain.try_borrow_mut() {
-        Ok(mut hull) => {
-            monotone_chain_into(&pts[start..], &mut hull);
-            pts.truncate(start);
-            pts.extend_from_slice(&hull);
-        }
-        // Unreachable (no hull is built inside another); a fresh buffer keeps it correct.
-        Err(_) => {
-            let mut hull = Vec::new();
-            monotone_chain_into(&pts[start..], &mut hull);
-            pts.truncate(start);
-            pts.extend_from_slice(&hull);
-        }
+    with_chain(|hull| {
+        monotone_chain_into(&pts[start..], hull);
+        pts.truncate(start);
+        pts.extend_from_slice(hull);
     });
 }
 
-/// The convex hull of points already sorted by `(x, y)` without repeats (Andrew's monotone
-/// chain, as [`convex_hull`] returns it).
-fn monotone_chain(pts: Vec<Point>) -> Vec<Point> {
-    if pts.len() <= 2 {
-        return pts;
-    }
-    let mut hull: Vec<Point> = Vec::new();
-    monotone_chain_into(&pts, &mut hull);
-    hull
+/// Runs `f` with the per-thread chain buffer ([`CHAIN`]), or with a fresh one should it be in
+/// use (no hull is built inside another, but a fresh buffer keeps that case correct).
+fn with_chain<R>(f: impl FnOnce(&mut Vec<Point>) -> R) -> R {
+    CHAIN.with(|chain| match chain.try_borrow_mut() {
+        Ok(mut buf) => f(&mut buf),
+        Err(_) => f(&mut Vec::new()),
+    })
 }
 
-/// [`monotone_chain`] of `pts` (at least three) into `hull`, which is cleared first.
+/// The convex hull of `pts` (at least three), sorted by `(x, y)` without repeats, into `hull`,
+/// which is cleared first (Andrew's monotone chain, as [`convex_hull`] returns it).
 fn monotone_chain_into(pts: &[Point], hull: &mut Vec<Point>) {
     hull.clear();
     hull.reserve(pts.len() + 1);
@@ -442,7 +432,7 @@ fn monotone_chain_into(pts: &[Point], hull: &mut Vec<Point>) {
     }
 }
 
-/// One chain of [`monotone_chain`], appended to `hull`.
+/// One chain of [`monotone_chain_into`], appended to `hull`.
 fn chain<'a>(hull: &mut Vec<Point>, pts: impl Iterator<Item = &'a Point>) {
     let start = hull.len();
     for &p in pts {
@@ -509,12 +499,9 @@ pub fn pixel_hull(mask: &Mask) -> ConvexShell {
     let mut hull = if transposed.len() <= 2 {
         back(&transposed)
     } else {
-        CHAIN.with(|chain| match chain.try_borrow_mut() {
-            Ok(mut chain) => {
-                monotone_chain_into(&transposed, &mut chain);
-                back(&chain)
-            }
-            Err(_) => back(&monotone_chain(transposed)),
+        with_chain(|chain| {
+            monotone_chain_into(&transposed, chain);
+            back(chain)
         })
     };
     if let Some(first) = hull

@@ -18,6 +18,7 @@
 
 use super::associate::Edge;
 use super::lifecycle::Track;
+use crate::assign::Dsu;
 use crate::frame::{BBox, TrackState};
 use crate::geometry::overlapping_box_pairs;
 
@@ -73,33 +74,21 @@ pub(crate) fn ambiguous_detections(
     // them), found by union–find: only whether each group is ambiguous is needed, not its
     // member lists (which cost two allocations per group and frame; issue 10).
     let nt = tracks.len();
-    let mut parent: Vec<usize> = (0..nt + num_dets).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
+    let mut groups = Dsu::new(nt + num_dets);
     for &(t, d) in &pairs {
-        let (a, b) = (find(&mut parent, t), find(&mut parent, nt + d));
-        if a != b {
-            parent[a.max(b)] = a.min(b);
-        }
+        groups.join(t, nt + d);
     }
     let mut ambiguous = vec![false; nt + num_dets];
     for &(t, d) in &pairs {
         let track_says = best_t.get(t).is_some_and(close)
             || tracks.get(t).is_some_and(|t| t.state() == TrackState::Lost);
         if track_says || best_d.get(d).is_some_and(close) {
-            let root = find(&mut parent, t);
-            ambiguous[root] = true;
+            ambiguous[groups.find(t)] = true;
         }
     }
     let mut want = vec![false; num_dets];
     for &(_, d) in &pairs {
-        let root = find(&mut parent, nt + d);
-        want[d] = ambiguous[root];
+        want[d] = ambiguous[groups.find(nt + d)];
     }
     want
 }

@@ -611,12 +611,8 @@ impl Track {
         };
         let size = (p.w.max(1.0) * p.h.max(1.0)).sqrt();
         let fast = shift.x.hypot(shift.y) > FAST_MOTION * size;
-        let corners = if p.is_valid() {
-            p.corners()
-        } else {
-            [Point::default(); 4]
-        };
-        let extra = if p.is_valid() { &corners[..] } else { &[] };
+        let corners = p.corners();
+        let extra: &[Point] = if p.is_valid() { &corners } else { &[] };
         // Moved (or swept) and merged with the predicted box in one buffer: the same hull as
         // `translated`/`swept` then `from_points`, with two allocations per track and frame
         // instead of about nine (issue 10).
