@@ -1,10 +1,12 @@
-//! Speed of the background subtractor and its stages on synthetic frames.
+//! Speed of the background subtractor and its stages, the dense flow and the moving-camera
+//! detector, on synthetic frames.
 //!
 //! `cargo bench --bench detect`; medians are in `target/criterion/*/new/estimates.json`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use shapetrack::detect::{
-    BackgroundConfig, BackgroundSubtractor, Components, Connectivity, Detector, Morphology,
+    BackgroundConfig, BackgroundSubtractor, Components, Connectivity, DenseFlow, Detector,
+    FlowConfig, FlowField, Morphology, MotionCue, MovingCameraDetector, MovingConfig,
 };
 use shapetrack::synth::{Scene, SynthConfig};
 use shapetrack::{Frame, PixelFormat};
@@ -125,5 +127,72 @@ fn bench_stages(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_subtractor, bench_stages);
+/// Grey levels of a smooth texture moved by `(dx, dy)`.
+fn grey(w: usize, h: usize, dx: f32, dy: f32) -> Vec<f32> {
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 + dx, (i / w) as f32 + dy);
+            128.0
+                + 40.0 * (0.31 * x).sin()
+                + 35.0 * (0.17 * y).sin()
+                + 25.0 * (0.23 * (x + y)).cos()
+        })
+        .collect()
+}
+
+fn bench_flow(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dense_flow");
+    // 213×120 is the moving-camera detector's working size for 854×480 (and 16:9 video).
+    for (w, h) in [(213usize, 120usize), (320, 180)] {
+        let (a, b) = (grey(w, h, 0.0, 0.0), grey(w, h, 2.3, -1.1));
+        let mut flow = DenseFlow::new(FlowConfig::default());
+        let mut out = FlowField::default();
+        g.bench_function(BenchmarkId::new("dis", format!("{w}x{h}")), |bch| {
+            bch.iter(|| {
+                flow.compute(&a, &b, w, h, &mut out);
+                black_box(out.u[0])
+            })
+        });
+    }
+    g.finish();
+}
+
+fn bench_moving(c: &mut Criterion) {
+    let mut g = c.benchmark_group("moving_detector");
+    g.sample_size(20);
+    let (w, h) = (854u32, 480u32);
+    let imgs = frames(w, h, 40);
+    for cue in [MotionCue::Flow, MotionCue::Background] {
+        let mut det = MovingCameraDetector::new(MovingConfig {
+            cue,
+            ..MovingConfig::default()
+        })
+        .unwrap();
+        for i in &imgs[..20] {
+            det.detect(&Frame::rgb(i, w, h).unwrap()).unwrap();
+        }
+        let mut k = 0usize;
+        g.bench_function(
+            BenchmarkId::new(format!("{cue:?}"), format!("{w}x{h}")),
+            |bch| {
+                bch.iter(|| {
+                    // Frames in order, as a video gives them (the detectors compare consecutive
+                    // frames); the wrap back every 20 frames is one jump in 20.
+                    let f = &imgs[20 + k % 20];
+                    k += 1;
+                    black_box(det.detect(&Frame::rgb(f, w, h).unwrap()).unwrap())
+                })
+            },
+        );
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    bench_subtractor,
+    bench_stages,
+    bench_flow,
+    bench_moving
+);
 criterion_main!(benches);

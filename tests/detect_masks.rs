@@ -6,7 +6,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::detect::{
-    refine_box, CameraJudge, Detector, MovingCameraDetector, MovingConfig, RefineConfig,
+    refine_box, CameraJudge, Detector, MotionCue, MovingCameraDetector, MovingConfig, RefineConfig,
 };
 use shapetrack::io::motchallenge::parse_mots;
 use shapetrack::io::read_text;
@@ -115,39 +115,91 @@ fn panning_frame(t: u32, w: u32, h: u32) -> (Vec<u8>, Mask) {
 #[test]
 fn moving_detector_finds_the_object_not_the_panning_background() {
     let (w, h) = (240, 160);
-    let mut det = MovingCameraDetector::new(MovingConfig::default()).unwrap();
-    let mut judge = CameraJudge::new();
-    let mut hits = 0;
-    let frames = 14;
-    for t in 0..frames {
+    for cue in [MotionCue::Flow, MotionCue::Background] {
+        let mut det = MovingCameraDetector::new(MovingConfig {
+            cue,
+            ..MovingConfig::default()
+        })
+        .unwrap();
+        let mut judge = CameraJudge::new();
+        let mut hits = 0;
+        let frames = 14;
+        for t in 0..frames {
+            let (img, gt) = panning_frame(t, w, h);
+            let f = Frame::rgb(&img, w, h).unwrap();
+            judge.observe(&f);
+            let dets = det.detect(&f).unwrap();
+            if t < 6 {
+                continue; // the background model is still learning its history
+            }
+            let best = dets
+                .iter()
+                .filter_map(|d| d.mask.as_ref())
+                .map(|m| m.iou(&gt))
+                .fold(0.0, f64::max);
+            if best >= 0.5 {
+                hits += 1;
+            }
+            // Nothing large on the background: every detection overlaps the object.
+            for d in &dets {
+                let m = d.mask.as_ref().unwrap();
+                let outside = m.area() - m.intersection(&gt);
+                assert!(
+                    outside as f64 <= 0.5 * gt.area() as f64,
+                    "{cue:?}, frame {t}: a detection with {outside} px off the object"
+                );
+            }
+        }
+        assert!(
+            hits >= 6,
+            "{cue:?}: object found in {hits} of {} frames",
+            frames - 6
+        );
+        assert_eq!(judge.moving(), Some(true));
+        assert_eq!(
+            det.resets(),
+            0,
+            "{cue:?}: the pan is an easy motion to follow"
+        );
+    }
+}
+
+#[test]
+fn the_flow_cue_finds_the_object_from_the_second_frame() {
+    // The flow needs one earlier frame and no history: the object is found from frame 2 on,
+    // where the background model has not learnt the scene yet.
+    let (w, h) = (240, 160);
+    let mut flow = MovingCameraDetector::new(MovingConfig::default()).unwrap();
+    let mut model = MovingCameraDetector::new(MovingConfig {
+        cue: MotionCue::Background,
+        ..MovingConfig::default()
+    })
+    .unwrap();
+    assert_eq!(flow.warmup(), (0, 1));
+    for t in 0..3 {
         let (img, gt) = panning_frame(t, w, h);
         let f = Frame::rgb(&img, w, h).unwrap();
-        judge.observe(&f);
-        let dets = det.detect(&f).unwrap();
-        if t < 6 {
-            continue; // the model is still learning its history
-        }
-        let best = dets
-            .iter()
-            .filter_map(|d| d.mask.as_ref())
-            .map(|m| m.iou(&gt))
-            .fold(0.0, f64::max);
-        if best >= 0.5 {
-            hits += 1;
-        }
-        // Nothing large on the background: every detection overlaps the object.
-        for d in &dets {
-            let m = d.mask.as_ref().unwrap();
-            let outside = m.area() - m.intersection(&gt);
-            assert!(
-                outside as f64 <= 0.5 * gt.area() as f64,
-                "frame {t}: a detection with {outside} px off the object"
+        let best = |dets: Vec<shapetrack::Detection>| {
+            dets.iter()
+                .filter_map(|d| d.mask.as_ref())
+                .map(|m| m.iou(&gt))
+                .fold(0.0, f64::max)
+        };
+        let (a, b) = (
+            best(flow.detect(&f).unwrap()),
+            best(model.detect(&f).unwrap()),
+        );
+        if t == 0 {
+            assert_eq!(a, 0.0, "nothing on the first frame");
+        } else {
+            assert!(a >= 0.7, "frame {t}: the flow cue's IoU {a}");
+            assert_eq!(
+                b, 0.0,
+                "frame {t}: the background model is still warming up"
             );
         }
     }
-    assert!(hits >= 6, "object found in {hits} of {} frames", frames - 6);
-    assert_eq!(judge.moving(), Some(true));
-    assert_eq!(det.resets(), 0, "the pan is an easy motion to follow");
+    assert_eq!(flow.warmup(), (1, 1));
 }
 
 /// A fine high-contrast texture (detail at 4–6 px), different everywhere.
@@ -168,10 +220,12 @@ fn foreground_share(det: &MovingCameraDetector) -> f64 {
 fn a_fine_texture_under_a_sub_pixel_pan_is_not_foreground() {
     // The warped background model is resampled (bilinearly) at every frame, which blurs fine
     // detail, and a sub-pixel pan lands between pixels: on fine texture both leave
-    // differences above the threshold along every edge. The tolerance allows for them.
+    // differences above the threshold along every edge. The background cue's tolerance
+    // allows for them; the flow cue must not see motion there either.
     let (w, h) = (240, 160);
-    let run = |tolerance: u32| {
+    let run = |cue: MotionCue, tolerance: u32| {
         let cfg = MovingConfig {
+            cue,
             tolerance,
             refine: None,
             ..MovingConfig::default()
@@ -196,7 +250,12 @@ fn a_fine_texture_under_a_sub_pixel_pan_is_not_foreground() {
         }
         (worst, dets, det.resets())
     };
-    let (with, dets, resets) = run(MovingConfig::default().tolerance);
+    // The flow cue has no model to resample: it compares flow with the camera's motion.
+    let (flow, dets, resets) = run(MotionCue::Flow, 0);
+    assert_eq!(resets, 0);
+    assert_eq!(dets, 0, "flow cue: detections on a still background");
+    assert!(flow < 0.005, "flow cue: {:.1} % foreground", 100.0 * flow);
+    let (with, dets, resets) = run(MotionCue::Background, MovingConfig::default().tolerance);
     assert_eq!(resets, 0);
     assert_eq!(dets, 0, "detections on a still background");
     assert!(
@@ -204,7 +263,7 @@ fn a_fine_texture_under_a_sub_pixel_pan_is_not_foreground() {
         "{:.1} % of the frame foreground",
         100.0 * with
     );
-    let (without, _, _) = run(0);
+    let (without, _, _) = run(MotionCue::Background, 0);
     assert!(
         without > 5.0 * with.max(0.002),
         "without the tolerance {:.1} % (with {:.1} %): the test no longer shows what it guards",
@@ -220,8 +279,10 @@ fn the_ghost_of_the_first_frames_object_is_cleared() {
     // for good: the uncovered background there differs from the model (a "ghost") until the
     // steady-colour rule replaces it.
     let (w, h) = (240, 160);
+    // A background-model effect: the flow cue keeps no model of the first frames.
     let run = |ghost_frames: u32| {
         let mut det = MovingCameraDetector::new(MovingConfig {
+            cue: MotionCue::Background,
             ghost_frames,
             ..MovingConfig::default()
         })

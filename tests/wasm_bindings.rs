@@ -1202,30 +1202,41 @@ fn camera_judge_tells_a_still_camera_from_a_panning_one() {
 
 #[wasm_bindgen_test]
 fn moving_detector_learns_then_finds_an_object_while_the_camera_pans() {
-    let mut det = MovingDetector::new(None).unwrap();
-    assert_eq!(det.warmup_frames(), 3, "min_age's default");
-    assert!(det.learning());
-    assert_eq!(det.camera_shift(), None);
-    let buf = FrameBuffer::new(160.0, 120.0).unwrap();
-    let mut found = Vec::new();
-    for n in 0..12 {
-        // The camera pans 2 px a frame; the square crosses the view at 6 px a frame.
-        paint(&buf, 2 * n, Some((20 + 6 * n, 48)));
-        found.push(det.detect(&buf).unwrap().len());
-        if n == 0 {
-            assert_eq!((det.warmup_seen(), det.learning()), (1, true));
+    // The default flow cue needs one earlier frame; the background cue `min_age` frames.
+    let background = settings(&serde_json::json!({ "cue": "background" }));
+    for (opts, needed) in [(None, 1u32), (Some(background), 3)] {
+        let mut det = MovingDetector::new(opts).unwrap();
+        assert_eq!(det.warmup_frames(), needed);
+        assert!(det.learning());
+        assert_eq!(det.camera_shift(), None);
+        let buf = FrameBuffer::new(160.0, 120.0).unwrap();
+        let mut found = Vec::new();
+        for n in 0..12 {
+            // The camera pans 2 px a frame; the square crosses the view at 6 px a frame.
+            paint(&buf, 2 * n, Some((20 + 6 * n, 48)));
+            found.push(det.detect(&buf).unwrap().len());
+            if n == 0 {
+                assert_eq!((det.warmup_seen(), det.learning()), (1, needed > 1));
+            }
         }
+        assert_eq!(det.resets(), 0, "the pan was followed");
+        assert!(!det.learning());
+        assert_eq!(det.warmup_seen(), needed);
+        let shift = det.camera_shift().expect("a motion estimate");
+        assert!((shift - 2.0).abs() < 0.5, "camera shift {shift} px");
+        assert!(
+            found[..needed as usize].iter().all(|&n| n == 0),
+            "nothing while learning: {found:?}"
+        );
+        assert!(
+            found[4..].iter().all(|&n| n > 0),
+            "the square is found: {found:?}"
+        );
     }
-    assert_eq!(det.resets(), 0, "the pan was followed");
-    assert!(!det.learning());
-    assert_eq!(det.warmup_seen(), 3);
-    let shift = det.camera_shift().expect("a motion estimate");
-    assert!((shift - 2.0).abs() < 0.5, "camera shift {shift} px");
-    assert_eq!(&found[..3], &[0, 0, 0], "nothing while learning: {found:?}");
-    assert!(
-        found[4..].iter().any(|&n| n > 0),
-        "the square is found: {found:?}"
-    );
+    let mut det = MovingDetector::new(None).unwrap();
+    let buf = FrameBuffer::new(160.0, 120.0).unwrap();
+    paint(&buf, 0, Some((20, 48)));
+    det.detect(&buf).unwrap();
 
     // A frame of another size is an error, not a trap; after `reset` it starts a new model.
     let small = FrameBuffer::new(80.0, 60.0).unwrap();
@@ -1250,6 +1261,16 @@ fn moving_detector_settings_are_checked_and_name_their_field() {
         ),
         (serde_json::json!({ "refine": [1, 2] }), "refine"),
         (serde_json::json!({ "alpha": "fast" }), "alpha"),
+        (serde_json::json!({ "cue": "optical" }), "cue"),
+        (
+            serde_json::json!({ "flow": { "patch_size": 2 } }),
+            "flow.patch_size",
+        ),
+        (serde_json::json!({ "flow": { "alpha": -1 } }), "flow.alpha"),
+        (
+            serde_json::json!({ "residual_factor": 1e9 }),
+            "residual_factor",
+        ),
     ] {
         let msg = error_message(MovingDetector::new(Some(settings(&opts))).err().unwrap());
         assert!(msg.contains(field), "{opts}: {msg}");
@@ -1258,7 +1279,8 @@ fn moving_detector_settings_are_checked_and_name_their_field() {
     assert!(error_message(not_object.err().unwrap()).contains("plain object"));
     for ok in [
         serde_json::json!({}),
-        serde_json::json!({ "refine": null, "min_age": 5 }),
+        serde_json::json!({ "cue": "background", "refine": null, "min_age": 5 }),
+        serde_json::json!({ "cue": "flow", "flow": { "patch_stride": 3 }, "min_residual": 1 }),
         serde_json::json!({ "refine": { "iterations": 1 }, "max_blobs": 2 }),
     ] {
         let det = MovingDetector::new(Some(settings(&ok)));

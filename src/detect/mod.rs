@@ -10,6 +10,7 @@
 
 pub mod background;
 pub mod components;
+pub mod flow;
 pub mod maxflow;
 pub mod morphology;
 pub mod moving;
@@ -17,9 +18,10 @@ pub mod refine;
 
 pub use background::{BackgroundConfig, BackgroundSubtractor, ShadowConfig, UpdatePolicy};
 pub use components::{Blob, Components, Connectivity, Run};
+pub use flow::{DenseFlow, FlowConfig, FlowField};
 pub use morphology::Morphology;
-pub use moving::{CameraJudge, CameraMotion, MovingCameraDetector, MovingConfig};
-pub use refine::{refine_box, BoxRefiner, RefineConfig};
+pub use moving::{CameraJudge, CameraMotion, MotionCue, MovingCameraDetector, MovingConfig};
+pub use refine::{refine_box, refine_box_hinted, BoxRefiner, Hint, RefineConfig};
 
 use crate::frame::{Detection, Frame};
 use thiserror::Error;

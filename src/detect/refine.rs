@@ -173,9 +173,43 @@ struct Crop {
     inside: Vec<bool>,
     /// Centre prior per pixel in `[0, 1]`: 0 at the centre, 1 at the box border.
     radial: Vec<f32>,
+    /// Inside pixels the detector's [`Hint`] marks (empty without a hint).
+    hinted: Vec<bool>,
 }
 
-fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
+/// Where a detector saw its object: a bitmap on a grid of `scale × scale`-pixel cells over the
+/// frame (the moving-camera detector's working foreground of one blob, for instance). The
+/// refinement then starts its colour models from it, the object's from the marked pixels
+/// inside the box and the background's from the ring and the box's unmarked pixels, instead
+/// of taking the whole box for the object at first (GrabCut started from a mask rather than
+/// a rectangle). A detector's blob often holds ground it joined: the box around both is
+/// loose, and a first model of the whole box learns that ground as object.
+#[derive(Debug, Clone, Copy)]
+pub struct Hint<'a> {
+    /// One byte per cell, row-major, non-zero where the object is.
+    pub bits: &'a [u8],
+    /// Cells per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Frame pixels per cell side.
+    pub scale: f64,
+}
+
+impl Hint<'_> {
+    /// Whether the cell under frame point `(x, y)` is marked.
+    fn at(&self, x: f64, y: f64) -> bool {
+        if !(x >= 0.0 && y >= 0.0 && self.scale > 0.0) {
+            return false;
+        }
+        let (cx, cy) = ((x / self.scale) as usize, (y / self.scale) as usize);
+        cx < self.width
+            && cy < self.height
+            && self.bits.get(cy * self.width + cx).is_some_and(|&b| b != 0)
+    }
+}
+
+fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig, hint: Option<&Hint>) -> Option<Crop> {
     let (fw, fh) = (frame.width() as f64, frame.height() as f64);
     let b = BBox::from_xyxy(
         bbox.x.max(0.0),
@@ -201,6 +235,11 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
     let luma = |x: u32, y: u32| frame.gray_at(x, y).unwrap_or(0.0);
     let mut inside = vec![false; w * h];
     let mut radial = vec![0f32; w * h];
+    let mut hinted = if hint.is_some() {
+        vec![false; w * h]
+    } else {
+        Vec::new()
+    };
     let (cx, cy) = (b.x + b.w / 2.0, b.y + b.h / 2.0);
     for j in 0..h {
         let ya = ry0 + j as f64 * scale;
@@ -236,6 +275,9 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
             }
             let (mx, my) = (xa + scale / 2.0, ya + scale / 2.0);
             inside[k] = mx >= b.x && mx < b.x2() && my >= b.y && my < b.y2();
+            if let Some(hint) = hint {
+                hinted[k] = inside[k] && hint.at(mx, my);
+            }
             let (dx, dy) = ((mx - cx) / (b.w / 2.0), (my - cy) / (b.h / 2.0));
             radial[k] = (dx * dx + dy * dy).sqrt().min(1.5) as f32;
         }
@@ -249,6 +291,7 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig) -> Option<Crop> {
         feat,
         inside,
         radial,
+        hinted,
     })
 }
 
@@ -387,11 +430,22 @@ pub fn refine_box(
     bbox: &BBox,
     cfg: &RefineConfig,
 ) -> Result<Option<Mask>, DetectError> {
+    refine_box_hinted(frame, bbox, cfg, None)
+}
+
+/// [`refine_box`] with the detector's [`Hint`] of where in the box the object is (ignored
+/// when it marks no pixel of the box).
+pub fn refine_box_hinted(
+    frame: &Frame,
+    bbox: &BBox,
+    cfg: &RefineConfig,
+    hint: Option<Hint>,
+) -> Result<Option<Mask>, DetectError> {
     cfg.validate()?;
     if !bbox.is_valid() {
         return Ok(None);
     }
-    let Some(crop) = make_crop(frame, bbox, cfg) else {
+    let Some(crop) = make_crop(frame, bbox, cfg, hint.as_ref()) else {
         return Ok(None);
     };
     let n = crop.w * crop.h;
@@ -462,8 +516,17 @@ pub fn refine_box(
             *l = nearest(&pal.centroids, c);
         }
     }
-    // Initial foreground weights: the box's pixels, more so near its centre.
-    let mut is_fg: Vec<bool> = unknown.clone();
+    // Initial foreground: the box's pixels (or those the hint marks), weighted more near the
+    // box centre.
+    let mut is_fg: Vec<bool> = if crop.hinted.iter().any(|&v| v) {
+        crop.hinted
+            .iter()
+            .zip(&unknown)
+            .map(|(&h, &u)| h && u)
+            .collect()
+    } else {
+        unknown.clone()
+    };
     let fg_weight = |is_fg: &[bool]| -> Vec<f64> {
         (0..n)
             .map(|p| {
@@ -535,8 +598,9 @@ pub fn refine_box(
     for _ in 0..cfg.iterations {
         let wf = fg_weight(&is_fg);
         let wb: Vec<f64> = (0..n).map(|p| if is_fg[p] { 0.0 } else { 1.0 }).collect();
-        // In the first round the box is all "foreground", so the background model sees only
-        // the ring: the box's own background colours are learnt from the ring's.
+        // In the first round the box is all "foreground" (without a hint), so the background
+        // model sees only the ring: the box's own background colours are learnt from the
+        // ring's; with a hint it also sees the box's pixels the hint leaves out.
         let (Some(fgm), Some(bgm)) = (
             Mixture::fit(&crop.feat, &wf, &label, k.max(1)),
             Mixture::fit(&crop.feat, &wb, &label, k.max(1)),
@@ -840,6 +904,59 @@ mod tests {
             }
         }
         (img, gt)
+    }
+
+    #[test]
+    fn a_hint_keeps_ground_the_blob_joined_out_of_the_mask() {
+        // A disc with a yellow patch of "ground" under it, both inside the box; the ring
+        // around the box shows only the striped background, so without a hint nothing tells
+        // the refinement that the yellow is not the object.
+        let (w, h) = (160, 140);
+        let (mut img, gt) = disc_image(w, h, 80.0, 55.0, 28.0);
+        for y in 84..112u32 {
+            for x in 46..114u32 {
+                let i = (y * w + x) as usize;
+                img[3 * i..3 * i + 3].copy_from_slice(&[230, 210, 40]);
+            }
+        }
+        let gt = Mask::from_full(w, h, &gt).unwrap();
+        let f = Frame::rgb(&img, w, h).unwrap();
+        let b = BBox::new(44.0, 22.0, 72.0, 92.0);
+        let cfg = RefineConfig::default();
+        let plain = refine_box(&f, &b, &cfg)
+            .unwrap()
+            .map_or(0.0, |m| m.iou(&gt));
+        // The hint: the disc on a grid of 4-pixel cells (as a working foreground would be).
+        let (hw, hh) = (w as usize / 4, h as usize / 4);
+        let bits: Vec<u8> = (0..hw * hh)
+            .map(|k| {
+                let (x, y) = ((k % hw) as f64 * 4.0 + 2.0, (k / hw) as f64 * 4.0 + 2.0);
+                ((x - 80.0).hypot(y - 55.0) < 26.0) as u8
+            })
+            .collect();
+        let hint = Hint {
+            bits: &bits,
+            width: hw,
+            height: hh,
+            scale: 4.0,
+        };
+        let hinted = refine_box_hinted(&f, &b, &cfg, Some(hint))
+            .unwrap()
+            .map_or(0.0, |m| m.iou(&gt));
+        assert!(hinted >= 0.85, "with the hint IoU {hinted}");
+        assert!(
+            plain < 0.7,
+            "without it IoU {plain}: the test no longer shows the gain"
+        );
+        // A hint that marks nothing inside the box is ignored.
+        let empty = Hint {
+            bits: &vec![0u8; hw * hh],
+            ..hint
+        };
+        let ignored = refine_box_hinted(&f, &b, &cfg, Some(empty))
+            .unwrap()
+            .map_or(0.0, |m| m.iou(&gt));
+        assert_eq!(ignored, plain);
     }
 
     #[test]

@@ -286,14 +286,16 @@ impl BackgroundDetector {
 // ------------------------------------------------------------------------------------------
 // Moving-camera detector
 
-/// Background subtraction for a moving camera: the camera's motion between frames is
-/// estimated and compensated, moving blobs are refined into masks (see the core's
-/// `MovingCameraDetector`). No model weights.
+/// Moving objects seen by a moving camera: the camera's motion between frames is estimated
+/// and what moves against it is found, by dense optical flow (the default) or by a
+/// compensated background model (`cue: "background"`); moving blobs are refined into masks
+/// (see the core's `MovingCameraDetector`). No model weights.
 ///
-/// Its model needs `min_age` frames of history before anything can be foreground, after the
-/// first frame and again after each re-initialisation (a cut, a jump the motion estimate could
-/// not follow): `learning`, `warmupSeen` and `warmupFrames` say where it is, so a page can
-/// explain frames without detections.
+/// The flow needs one earlier frame, the background model `min_age` frames of history,
+/// before anything can be foreground, after the first frame and again after each
+/// re-initialisation (a cut, a jump the motion estimate could not follow): `learning`,
+/// `warmupSeen` and `warmupFrames` say where it is, so a page can explain frames without
+/// detections.
 #[wasm_bindgen]
 pub struct MovingDetector {
     inner: MovingCameraDetector,
@@ -331,7 +333,8 @@ impl MovingDetector {
         self.inner.warmup().0
     }
 
-    /// Frames of history the model needs before it detects (`min_age`).
+    /// Frames of history the model needs before it detects (1 for the flow cue: one earlier
+    /// frame; `min_age` for the background cue).
     #[wasm_bindgen(getter, js_name = warmupFrames)]
     pub fn warmup_frames(&self) -> u32 {
         self.inner.warmup().1

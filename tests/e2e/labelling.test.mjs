@@ -368,15 +368,18 @@ test('bad files are refused with a message, not a crash', async () => {
 // 736 → 744 KB with the bench page's sized scene and the offline snapshots' deferred
 // downscaling (739 KiB then); 744 → 756 KB with the offline pass's box smoother and its
 // settings (753 KiB then); 756 → 760 KB with the box → mask refinement of the SSD's boxes
-// (`BoxRefiner`, its settings) and `Detections.addUncovered` (754.2 → 757.8 KiB).
-test('wasm is at most 760 KB gzipped', () => {
+// (`BoxRefiner`, its settings) and `Detections.addUncovered` (754.2 → 757.8 KiB); 760 → 780 KB
+// with the moving-camera detector's dense optical flow (DIS and its variational refinement,
+// the flow cue's settings: 758.9 → 776 KiB; mean J on the DAVIS moving-camera clips 0.48 →
+// 0.67).
+test('wasm is at most 780 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
   assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
   const bytes = readFileSync(join(dir, wasm[0]));
   const gz = gzipSync(bytes, { level: 9 }).length;
   console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
-  assert.ok(gz <= 760 * 1024, `${gz} bytes gzipped`);
+  assert.ok(gz <= 780 * 1024, `${gz} bytes gzipped`);
 });
 
 test('no request left localhost', () => {

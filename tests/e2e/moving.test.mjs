@@ -17,17 +17,22 @@ const JPEG = join(DAVIS, 'JPEGImages', '480p', 'car-shadow');
 const MASKS = join(DAVIS, 'Annotations', '480p', 'car-shadow');
 /** How long each JPEG stays on the recorded canvas (ms): a 5 fps video, one frame per JPEG. */
 const HOLD_MS = 200;
-/** The car's track has mask IoU ≥ this … */
+/** The car's track has mask IoU ≥ this on most of the video's frames (issue 11's acceptance). */
 const IOU = 0.6;
 /**
- * … on at least this many of the video's frames. A regression floor, NOT issue 11's
- * acceptance (IoU ≥ 0.6 on most frames). Measured with the ghost removal: 19 of 40 frames on
- * a quiet machine (25 of 40 since the car keeps one id to the end), but 7 of 40 while other
- * jobs load both cores (the page's realtime VP8 encoder then records lower-quality frames),
- * so the floor stays at what a loaded machine gives. `shapetrack detect` on the JPEGs
- * themselves: 27 of 40. The log prints the per-frame figures.
+ * Measured with the dense-flow cue (2026-12-01): 34 of 39 frames on a quiet machine and 28 of
+ * 33 with two CPU hogs beside Chromium (the page's realtime VP8 encoder then records fewer,
+ * lower-quality frames); the first four frames are the automatic choice's (the camera is
+ * judged on five). With the background-model cue it had been 19–25 of 40 quiet and 7 of 40
+ * loaded, so the test asked only for 5 then. `shapetrack detect-eval` on the JPEGs
+ * themselves: car-shadow J 0.751.
  */
-const MIN_GOOD = 5;
+const MOST = 0.5;
+/**
+ * The car's outline, not its box: the mask fills less than this share of its own box on most
+ * frames where it covers the car (a filled rectangle fills all of it; the car, about 0.8).
+ */
+const FILL = 0.95;
 /**
  * Id changes on the car allowed: none (issue 11's acceptance, one id). Before the page's
  * tracker knew the video's frame rate (it got `fps` only for the offline pass, so its online
@@ -112,7 +117,7 @@ test('the car-shadow clip opened as a video gets the moving-camera detector on i
   // Per frame of the video: which JPEG it shows (the recording's timing is the browser's, so
   // frames are matched by content, on 107×60 copies), and each track's mask IoU with that
   // JPEG's ground truth.
-  /** @type {{ frames: number[], ious: Record<string, number[]> }} */
+  /** @type {{ frames: number[], ious: Record<string, number[]>, fills: Record<string, number[]> }} */
   const m = await page.evaluate(async (pngs) => {
     const w = /** @type {any} */ (window);
     const a = w.__shapetrack.app;
@@ -151,11 +156,25 @@ test('the car-shadow clip opened as a video gets the moving-camera detector on i
     }
     /** @type {Record<string, number[]>} */
     const ious = {};
+    /** @type {Record<string, number[]>} share of its own tight box each mask fills */
+    const fills = {};
     for (const id of a.model.table.ids()) {
+      fills[id] = [];
       ious[id] = frames.map((k, i) => {
         const r = a.model.table.get(i + 1, id);
         if (!r?.mask) return 0;
         const mk = a.core.decodeMask(r.mask);
+        let [x0, y0, x1, y1, on] = [Infinity, Infinity, -1, -1, 0];
+        for (let y = 0; y < mk.height; y++)
+          for (let x = 0; x < mk.width; x++)
+            if (mk.data[y * mk.width + x]) {
+              on++;
+              x0 = Math.min(x0, x);
+              x1 = Math.max(x1, x);
+              y0 = Math.min(y0, y);
+              y1 = Math.max(y1, y);
+            }
+        fills[id].push(on ? on / ((x1 - x0 + 1) * (y1 - y0 + 1)) : 1);
         const g = truth[k];
         let inter = 0;
         let area = 0;
@@ -170,7 +189,7 @@ test('the car-shadow clip opened as a video gets the moving-camera detector on i
         return inter / (area + gArea - inter);
       });
     }
-    return { frames, ious };
+    return { frames, ious, fills };
   }, pngs);
 
   const n = m.frames.length;
@@ -206,7 +225,11 @@ test('the car-shadow clip opened as a video gets the moving-camera detector on i
   assert.ok(switches <= SWITCHES, `the car changed id ${switches} times: ${owners.join(' → ')}`);
   const good = carIous.filter((v) => v >= IOU).length;
   console.log(`car-shadow: mask IoU ≥ ${IOU} on ${good} of ${n} frames`);
-  assert.ok(good >= MIN_GOOD, `mask IoU ≥ ${IOU} on ${good} of ${n} frames: ${line}`);
+  assert.ok(good > MOST * n, `mask IoU ≥ ${IOU} on ${good} of ${n} frames: ${line}`);
+  const fills = m.fills[car];
+  const outlined = fills.filter((v) => v < FILL).length;
+  console.log(`car-shadow: the car's mask fills < ${FILL} of its box on ${outlined} of ${fills.length} masks (${fills.map((v) => v.toFixed(2)).join(' ')})`);
+  assert.ok(outlined > MOST * fills.length, `the car's outline, not its box: ${fills.map((v) => v.toFixed(2)).join(' ')}`);
   await page.screenshot({ path: join(OUT, 'moving-car-shadow.png') });
   assert.deepEqual(errors, []);
   await page.close();

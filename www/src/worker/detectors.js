@@ -201,8 +201,8 @@ export const JUDGE_FRAMES = 5;
  * not lost those frames; the other is dropped. Nothing is reported before the deciding frame:
  * the tracker then has no shape yet and is rebuilt with the chosen detector's settings (see
  * `tracker`), which differ in `camera_motion`. That costs the moving-camera detector's first
- * possible frame (it needs `min_age` = 3 frames of history, so it could report from frame 4;
- * the decision comes with frame 5).
+ * possible frames (its flow needs one earlier frame, so it could report from frame 2; the
+ * decision comes with frame 5).
  * @type {DetectorFactory}
  */
 function automatic(options) {
