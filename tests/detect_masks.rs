@@ -323,6 +323,39 @@ fn the_ghost_of_the_first_frames_object_is_cleared() {
 }
 
 #[test]
+fn frames_of_any_size_are_detected_without_panicking() {
+    // Thin, tiny and odd frames reach every stage of both cues (a flow too small for one
+    // patch, a camera fit with no grid samples, a working frame of one pixel).
+    for (w, h) in [(1u32, 1u32), (3, 2), (7, 200), (300, 5), (17, 13), (61, 47)] {
+        for cue in [MotionCue::Flow, MotionCue::Background] {
+            let mut det = MovingCameraDetector::new(MovingConfig {
+                cue,
+                ..MovingConfig::default()
+            })
+            .unwrap();
+            for t in 0..4 {
+                let (img, _) = render(
+                    w,
+                    h,
+                    2.0 * t as f64,
+                    0.0,
+                    (w as f64 / 2.0, h as f64 / 2.0, 3.0, 2.0),
+                );
+                let dets = det.detect(&Frame::rgb(&img, w, h).unwrap()).unwrap();
+                for d in &dets {
+                    let m = d.mask.as_ref().expect("a mask");
+                    assert!(
+                        m.x() >= 0 && m.y() >= 0,
+                        "{w}x{h} {cue:?}: mask off the frame"
+                    );
+                    assert!(m.x() as u32 + m.width() <= w && m.y() as u32 + m.height() <= h);
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn a_cut_resets_the_moving_detector_without_spraying_detections() {
     let (w, h) = (200, 140);
     let mut det = MovingCameraDetector::new(MovingConfig::default()).unwrap();
