@@ -459,7 +459,9 @@ export class App {
     if (!w) return;
     const what = {
       background: ['learning the background', 'background learnt'],
-      moving: ['learning the scene behind the moving camera', 'scene learnt'],
+      // The moving-camera detector's flow compares each frame with the one before (one
+      // frame to wait for); its background-model cue learns `min_age` frames.
+      moving: ['measuring the camera motion', 'camera motion measured'],
       judge: ['judging whether the camera moves', 'camera judged'],
     }[w.what ?? 'background'];
     if (w.seen < w.total) {
@@ -467,7 +469,7 @@ export class App {
       this.warming = true;
     } else if (this.warming) {
       this.warming = false;
-      this.status(this.choiceNote(`${what[1]} from ${w.total} frames: detecting`));
+      this.status(this.choiceNote(`${what[1]} from ${w.total} frame${w.total === 1 ? '' : 's'}: detecting`));
     }
   }
 
