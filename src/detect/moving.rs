@@ -507,6 +507,18 @@ fn ssd(a: &Gray, ax: usize, ay: usize, b: &Gray, bx: usize, by: usize) -> f32 {
     s
 }
 
+/// Largest displacement under `t` of a corner of a `w × h` frame ([`CameraMotion`]'s).
+fn corner_displacement(t: &Transform, w: usize, h: usize) -> f64 {
+    let (w, h) = (w as f64, h as f64);
+    [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+        .iter()
+        .map(|&(x, y)| {
+            let p = Point::new(x, y);
+            t.apply(p).dist(p)
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Estimates the camera motion from `prev` to `cur` (working frames of equal size).
 fn estimate_motion(prev: &Gray, cur: &Gray, seed: u64) -> Option<CameraMotion> {
     let (gx, gy) = global_shift(&prev.shrink(2), &cur.shrink(2));
@@ -581,19 +593,11 @@ fn estimate_motion(prev: &Gray, cur: &Gray, seed: u64) -> Option<CameraMotion> {
     )
     .ok()?;
     let t = fit.transform;
-    let (w, h) = (prev.w as f64, prev.h as f64);
-    let displacement = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
-        .iter()
-        .map(|&(x, y)| {
-            let p = Point::new(x, y);
-            t.apply(p).dist(p)
-        })
-        .fold(0.0, f64::max);
     Some(CameraMotion {
         transform: t,
         matches: matches.len(),
         inliers: fit.inliers.len(),
-        displacement,
+        displacement: corner_displacement(&t, prev.w, prev.h),
     })
 }
 
@@ -769,25 +773,11 @@ impl MovingCameraDetector {
             .as_ref()
             .filter(|_| trusted)
             .and_then(|f| Some((f, f.transform.inverse().ok()?)));
-        self.last_motion = motion.as_ref().map(|(f, inv)| {
-            let displacement = [
-                (0.0, 0.0),
-                (w as f64, 0.0),
-                (0.0, h as f64),
-                (w as f64, h as f64),
-            ]
-            .iter()
-            .map(|&(x, y)| {
-                let p = Point::new(x, y);
-                inv.apply(p).dist(p)
-            })
-            .fold(0.0, f64::max);
-            CameraMotion {
-                transform: *inv,
-                matches: matches.len(),
-                inliers: f.inliers.len(),
-                displacement,
-            }
+        self.last_motion = motion.as_ref().map(|(f, inv)| CameraMotion {
+            transform: *inv,
+            matches: matches.len(),
+            inliers: f.inliers.len(),
+            displacement: corner_displacement(inv, w, h),
         });
         let Some((fit, _)) = motion else {
             // A cut, a blur, a frame the affine motion cannot explain: nothing this frame,
