@@ -158,7 +158,7 @@ pub fn intersecting_pairs<T: Borrow<ConvexShell>, D: Borrow<ConvexShell>>(
         out.extend(
             cands
                 .iter()
-                .filter(|&&j| pt[i].intersects_gjk(&pd[j]))
+                .filter(|&&j| pt[i].intersects_fast(&pd[j]))
                 .map(|&j| (i, j)),
         );
     }

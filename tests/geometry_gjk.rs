@@ -83,6 +83,31 @@ fn parry_gjk_without_aabb_agrees_with_brute_force() {
     });
 }
 
+/// The region estimator's test (a deep-inside fast accept, then GJK) agrees with the
+/// brute-force test outside the band, and with GJK alone on every pair, touching ones
+/// included (a point 0.01 px inside both shells is an overlap no rounding band hides).
+#[test]
+fn fast_accept_then_gjk_is_gjk() {
+    let decided = run_pairs(3000, PARRY_BAND, |a, b| {
+        PreparedShell::new(a).intersects_fast(&PreparedShell::new(b))
+    });
+    assert_coverage(&decided);
+    TestRunner::new(config(1500))
+        .run(&shell_pair(), |(kind, a, b)| {
+            let (pa, pb) = (PreparedShell::new(&a), PreparedShell::new(&b));
+            prop_assert_eq!(
+                pa.intersects_fast(&pb),
+                pa.intersects_gjk(&pb),
+                "kind {:?} a {:?} b {:?}",
+                kind,
+                a,
+                b
+            );
+            Ok(())
+        })
+        .unwrap();
+}
+
 /// The thesis' GJK (f64) agrees with the brute-force test outside a 1e-6 px band.
 #[test]
 fn thesis_gjk_agrees_with_brute_force() {

@@ -242,15 +242,17 @@ impl ColorSample {
         }
         let b = mask.bbox();
         let mut spacing = (area as f64 / max_samples as f64).sqrt().max(1.0);
-        // The grid count is only ≈ area / spacing²; widen the grid until the bound holds.
+        // The grid count is only ≈ area / spacing²; widen the grid until the bound holds,
+        // sampling into the same buffers each time.
+        let mut s = Self::default();
         for _ in 0..8 {
-            let s = grid_sample(frame, mask, b.x, b.y, b.w, b.h, spacing);
+            grid_sample_into(frame, mask, (b.x, b.y, b.w, b.h), spacing, &mut s);
             if s.positions.len() <= max_samples {
                 return s;
             }
             spacing *= (s.positions.len() as f64 / max_samples as f64).sqrt() * 1.01;
         }
-        let s = grid_sample(frame, mask, b.x, b.y, b.w, b.h, spacing);
+        grid_sample_into(frame, mask, (b.x, b.y, b.w, b.h), spacing, &mut s);
         // Unreachable in practice; keep an evenly strided subset rather than panic or overflow.
         let stride = s.positions.len().div_ceil(max_samples).max(1);
         Self {
@@ -283,44 +285,91 @@ impl ColorSample {
     }
 }
 
-fn grid_sample(
+/// The grid samples of `frame` inside `mask` over the box `(x0, y0, w, h)` at `spacing`, into
+/// `out` (its buffers reused: [`ColorSample::from_mask`] may try several grids).
+fn grid_sample_into(
     frame: &Frame<'_>,
     mask: &Mask,
-    x0: f64,
-    y0: f64,
-    w: f64,
-    h: f64,
+    (x0, y0, w, h): (f64, f64, f64, f64),
     spacing: f64,
-) -> ColorSample {
+    out: &mut ColorSample,
+) {
     let (nx, ny) = ((w / spacing).ceil() as usize, (h / spacing).ceil() as usize);
-    // At most one sample per grid point and per foreground pixel: reserved once.
+    // At most one sample per grid point and per foreground pixel.
     let cap = nx.saturating_mul(ny).min(mask.area() as usize);
-    let mut positions = Vec::with_capacity(cap);
-    let mut rgb = Vec::with_capacity(cap);
+    out.positions.clear();
+    out.rgb.clear();
+    out.positions.reserve(cap);
+    out.rgb.reserve(cap);
+    out.spacing = spacing;
+    let ColorSample { positions, rgb, .. } = out;
+    grid_points(frame, mask, (x0, y0, w, h), spacing, |px, py, c| {
+        positions.push(Point::new(px + 0.5, py + 0.5));
+        rgb.push(c);
+    });
+}
+
+/// Calls `f(px, py, rgb)` for every grid point of the box `(x0, y0, w, h)` at `spacing`
+/// (pixel `(px, py)`, floored) that lies in `mask` and in `frame`, row by row. Each column's
+/// pixel and its offsets in the mask's and the frame's rows are computed once per grid, not
+/// once per point (a floor is a libm call on baseline x86-64 and in wasm), and the points
+/// read the two rows directly: the same points, in the same order, as testing
+/// [`Mask::get`] and [`Frame::rgb_at`] at each one.
+fn grid_points(
+    frame: &Frame<'_>,
+    mask: &Mask,
+    (x0, y0, w, h): (f64, f64, f64, f64),
+    spacing: f64,
+    mut f: impl FnMut(f64, f64, [u8; 3]),
+) {
+    let (nx, ny) = ((w / spacing).ceil() as usize, (h / spacing).ceil() as usize);
+    let (mw, mh) = (mask.width() as i64, mask.height() as i64);
+    let (fw, fh) = (i64::from(frame.width()), i64::from(frame.height()));
+    let channels = frame.format().channels();
+    // Columns inside both the mask's bitmap and the frame: (pixel x, mask column, frame
+    // byte offset). A column outside either takes no sample in any row. On the stack up to
+    // `COLS` columns (a shape's budget of samples spans far fewer), so sampling allocates
+    // only its output.
+    const COLS: usize = 128;
+    let column = |i: usize| {
+        let px = (x0 + (i as f64 + 0.5) * spacing).floor();
+        let xi = px as i64;
+        let lx = xi - i64::from(mask.x());
+        let inside = (0..mw).contains(&lx) && (0..fw).contains(&xi);
+        inside.then(|| (px, lx as usize, xi as usize * channels))
+    };
+    let mut stack = [(0.0, 0usize, 0usize); COLS];
+    let heap: Vec<(f64, usize, usize)>;
+    let cols: &[(f64, usize, usize)] = if nx <= COLS {
+        let mut n = 0;
+        for c in (0..nx).filter_map(column) {
+            stack[n] = c;
+            n += 1;
+        }
+        &stack[..n]
+    } else {
+        heap = (0..nx).filter_map(column).collect();
+        &heap
+    };
+    let (bits, data, stride) = (mask.data(), frame.data(), frame.stride());
     for j in 0..ny {
         let py = (y0 + (j as f64 + 0.5) * spacing).floor();
-        for i in 0..nx {
-            let px = (x0 + (i as f64 + 0.5) * spacing).floor();
-            let (xi, yi) = (px as i64, py as i64);
-            let (Ok(mx), Ok(my)) = (i32::try_from(xi), i32::try_from(yi)) else {
-                continue;
-            };
-            if !mask.get(mx, my) {
-                continue;
-            }
-            let (Ok(fx), Ok(fy)) = (u32::try_from(xi), u32::try_from(yi)) else {
-                continue;
-            };
-            if let Some(c) = frame.rgb_at(fx, fy) {
-                positions.push(Point::new(px + 0.5, py + 0.5));
-                rgb.push(c);
+        let yi = py as i64;
+        let ly = yi - i64::from(mask.y());
+        if !((0..mh).contains(&ly) && (0..fh).contains(&yi)) {
+            continue;
+        }
+        let Some(row) = bits.get(ly as usize * mw as usize..(ly as usize + 1) * mw as usize) else {
+            continue;
+        };
+        let base = yi as usize * stride;
+        for &(px, lx, off) in cols {
+            if row.get(lx).is_some_and(|&b| b != 0) {
+                if let Some(c) = data.get(base + off..base + off + 3) {
+                    f(px, py, [c[0], c[1], c[2]]);
+                }
             }
         }
-    }
-    ColorSample {
-        positions,
-        rgb,
-        spacing,
     }
 }
 
@@ -626,6 +675,41 @@ pub fn foreign_share(
     rare: f64,
     cfg: &ColorConfig,
 ) -> Result<f64, ColorError> {
+    let n = b.rgb.len();
+    let foreign = count_foreign((a, pa), b, rare, cfg, |_, _| false)?;
+    Ok(foreign as f64 / n as f64)
+}
+
+/// Whether [`foreign_share`] is at least `min_share`, decided as soon as the samples counted
+/// so far settle it: in a crowd of look-alike shapes the screen
+/// (`track::ColourCost`) meets pairs that share their colours, and a tenth of a detection's
+/// samples found at home already says no. Exactly `foreign_share(…)? >= min_share`.
+pub fn foreign_share_at_least(
+    (a, pa): (&ColorSample, &ViewPalette),
+    b: &ColorSample,
+    rare: f64,
+    min_share: f64,
+    cfg: &ColorConfig,
+) -> Result<bool, ColorError> {
+    let n = b.rgb.len();
+    let share = |k: usize| k as f64 / n as f64;
+    // `foreign` only grows and `foreign + unseen` only shrinks, so each bound, once past
+    // `min_share`, stays past it: the final share lies between them.
+    let foreign = count_foreign((a, pa), b, rare, cfg, |foreign, seen| {
+        share(foreign) >= min_share || share(foreign + (n - seen)) < min_share
+    })?;
+    Ok(share(foreign) >= min_share)
+}
+
+/// The number of `b`'s samples foreign to the view `a` (see [`foreign_share`]), counting in
+/// order and stopping early once `stop(foreign so far, samples seen)` says so.
+fn count_foreign(
+    (a, pa): (&ColorSample, &ViewPalette),
+    b: &ColorSample,
+    rare: f64,
+    cfg: &ColorConfig,
+    stop: impl Fn(usize, usize) -> bool,
+) -> Result<usize, ColorError> {
     cfg.validate()?;
     let a = checked(a)?;
     let b = checked(b)?;
@@ -639,28 +723,33 @@ pub fn foreign_share(
         });
     }
     // Each palette colour's reach, from the view's own samples: a colour k-means fitted to a
-    // broad spread of shades covers a wider neighbourhood than a tight one.
+    // broad spread of shades covers a wider neighbourhood than a tight one. Kept squared
+    // and rooted once per colour: the root is monotone, so the root of the largest square
+    // is the largest root, bit for bit.
     let k = pa.centroids.len();
     let mut reach = vec![0.0f64; k];
     for (c, &l) in a.rgb.iter().zip(&pa.labels) {
         if let (Some(r), Some(centroid)) = (reach.get_mut(l), pa.centroids.get(l)) {
-            *r = r.max(distance2(&c.map(f64::from), centroid).sqrt());
+            *r = r.max(distance2(&c.map(f64::from), centroid));
         }
     }
+    reach.iter_mut().for_each(|r| *r = r.sqrt());
     let share = pa.histogram();
-    let foreign = b
-        .rgb
-        .iter()
-        .filter(|c| {
-            let (l, d2, _) = closest_two(&pa.centroids, &c.map(f64::from));
-            let common = share.get(l).is_some_and(|&h| h >= rare);
-            let near = reach
-                .get(l)
-                .is_some_and(|&r| d2.sqrt() <= r + cfg.color_tolerance);
-            !(common && near)
-        })
-        .count();
-    Ok(foreign as f64 / b.rgb.len() as f64)
+    let mut foreign = 0;
+    for (seen, c) in b.rgb.iter().enumerate() {
+        let (l, d2, _) = closest_two(&pa.centroids, &c.map(f64::from));
+        let common = share.get(l).is_some_and(|&h| h >= rare);
+        let near = reach
+            .get(l)
+            .is_some_and(|&r| d2.sqrt() <= r + cfg.color_tolerance);
+        if !(common && near) {
+            foreign += 1;
+        }
+        if stop(foreign, seen + 1) {
+            break;
+        }
+    }
+    Ok(foreign)
 }
 
 /// One shape's own palette ([`view_palette`]) and its samples' labels in it.
@@ -964,6 +1053,109 @@ mod tests {
         // Small enough to keep every pixel.
         assert_eq!(ColorSample::from_mask(&frame, &mask, 8000).len(), 8000);
         assert!(ColorSample::from_mask(&frame, &Mask::empty(), 10).is_empty());
+    }
+
+    /// The grid's samples are those of testing every grid point with `Mask::get` and
+    /// `Frame::rgb_at` (the per-point form the row reads replaced), for masks partly outside
+    /// the frame on every side, RGB and RGBA frames, and spacings above and below a pixel.
+    #[test]
+    fn grid_sampling_reads_the_points_the_per_point_tests_would() {
+        let reference = |frame: &Frame<'_>, mask: &Mask, spacing: f64| {
+            let b = mask.bbox();
+            let (nx, ny) = (
+                (b.w / spacing).ceil() as usize,
+                (b.h / spacing).ceil() as usize,
+            );
+            let mut out = Vec::new();
+            for j in 0..ny {
+                let py = (b.y + (j as f64 + 0.5) * spacing).floor();
+                for i in 0..nx {
+                    let px = (b.x + (i as f64 + 0.5) * spacing).floor();
+                    let (xi, yi) = (px as i64, py as i64);
+                    if !mask.get(xi as i32, yi as i32) || xi < 0 || yi < 0 {
+                        continue;
+                    }
+                    if let Some(c) = frame.rgb_at(xi as u32, yi as u32) {
+                        out.push((Point::new(px + 0.5, py + 0.5), c));
+                    }
+                }
+            }
+            out
+        };
+        let (w, h) = (64u32, 48u32);
+        let rgb: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 253) as u8).collect();
+        let rgba: Vec<u8> = (0..w * h * 4).map(|i| (i * 5 % 251) as u8).collect();
+        let frames = [
+            Frame::rgb(&rgb, w, h).unwrap(),
+            Frame::rgba(&rgba, w, h).unwrap(),
+        ];
+        let mut seed = 17u32;
+        let mut next = |n: u32| {
+            seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            (seed >> 8) % n
+        };
+        for case in 0..200 {
+            let (mw, mh) = (1 + next(40), 1 + next(40));
+            let (mx, my) = (next(w + 30) as i32 - 20, next(h + 30) as i32 - 20);
+            let bits: Vec<u8> = (0..mw * mh).map(|_| u8::from(next(3) > 0)).collect();
+            let mask = Mask::new(mx, my, mw, mh, bits).unwrap();
+            if mask.area() == 0 {
+                continue;
+            }
+            let spacing = [0.7, 1.0, 1.6, 3.3][case % 4];
+            let frame = &frames[case % 2];
+            let mut got = ColorSample::default();
+            let bb = mask.bbox();
+            grid_sample_into(frame, &mask, (bb.x, bb.y, bb.w, bb.h), spacing, &mut got);
+            let got: Vec<(Point, [u8; 3])> = got
+                .positions
+                .iter()
+                .copied()
+                .zip(got.rgb.iter().copied())
+                .collect();
+            assert_eq!(got, reference(frame, &mask, spacing), "case {case}");
+        }
+    }
+
+    /// The screen's early decision is the full share compared with the threshold, for
+    /// views and candidates of mixed colours and thresholds across the range.
+    #[test]
+    fn the_screen_decides_as_the_full_share_does() {
+        let cfg = ColorConfig::default();
+        let colours = [
+            [200, 20, 20],
+            [20, 20, 200],
+            [20, 200, 20],
+            [220, 220, 0],
+            [90, 90, 90],
+        ];
+        let mut seed = 5u32;
+        let mut next = |n: u32| {
+            seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            ((seed >> 8) % n) as usize
+        };
+        let mut decided = [0usize; 2];
+        for case in 0..300 {
+            let mix = |next: &mut dyn FnMut(u32) -> usize| {
+                let parts: Vec<ColorSample> = (0..1 + next(3))
+                    .map(|_| samples(1 + next(40), colours[next(5)]))
+                    .collect();
+                joined(&parts)
+            };
+            let a = mix(&mut next);
+            let b = mix(&mut next);
+            let pa = view_palette(&a, &cfg).unwrap();
+            let min_share = [0.0, 0.1, 0.5, 0.9, 1.0][case % 5];
+            let full = foreign_share((&a, &pa), &b, 0.03, &cfg).unwrap();
+            let early = foreign_share_at_least((&a, &pa), &b, 0.03, min_share, &cfg).unwrap();
+            assert_eq!(
+                early,
+                full >= min_share,
+                "case {case}: share {full}, at {min_share}"
+            );
+            decided[usize::from(early)] += 1;
+        }
+        assert!(decided[0] > 30 && decided[1] > 30, "{decided:?}");
     }
 
     #[test]

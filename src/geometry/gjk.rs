@@ -10,6 +10,11 @@ use parry2d::shape::{ConvexPolygon, Segment, SupportMap};
 use super::shell::{aabbs_overlap, cross, point_segment_distance, ConvexShell, TOUCH_TOLERANCE};
 use crate::frame::{BBox, Point};
 
+/// How far inside a shell, in pixels, a point must lie for [`PreparedShell::intersects_fast`]
+/// to accept a pair without GJK: far above parry's f32 rounding on the shells' local
+/// coordinates (~1e-4 px at a few thousand pixels), far below a pixel.
+const DEEP_INSIDE: f64 = 0.01;
+
 /// A shell converted once into parry2d's f32 representation, for repeated GJK queries.
 ///
 /// parry2d computes in f32 (glam `Vec2`). Image coordinates of a 4K frame already lose
@@ -21,6 +26,9 @@ use crate::frame::{BBox, Point};
 #[derive(Debug, Clone)]
 pub struct PreparedShell<'a> {
     origin: Point,
+    /// The mean of the vertices: a point inside the shell (convex), for
+    /// [`PreparedShell::intersects`]' fast accept.
+    inner: Point,
     aabb: BBox,
     shape: Local,
     /// The f64 shell, for the exact fallback when the f32 conversion is unusable: borrowed,
@@ -74,8 +82,15 @@ impl<'a> PreparedShell<'a> {
                 },
             }
         };
+        let inner = if verts.is_empty() {
+            origin
+        } else {
+            let sum = verts.iter().fold(Point::default(), |acc, p| acc + *p);
+            sum * (1.0 / verts.len() as f64)
+        };
         Self {
             origin,
+            inner,
             aabb: shell.aabb(),
             shape,
             shell,
@@ -105,6 +120,44 @@ impl<'a> PreparedShell<'a> {
         let dx = (other.origin.x - self.origin.x) as f32;
         let dy = (other.origin.y - self.origin.y) as f32;
         (dx.is_finite() && dy.is_finite()).then(|| Pose::translation(dx, dy))
+    }
+
+    /// Whether `p` lies inside this shell by at least [`DEEP_INSIDE`] from every edge: then
+    /// any shell containing `p` meets this one, and parry's GJK (in f32) says so too, since
+    /// the overlap is far deeper than its rounding. `O(n)` with no root or division, against
+    /// GJK's iterations of support-point searches: in a crowd most candidate pairs overlap
+    /// deeply (issue 10: GJK was a sixth of the 200-shape frame's region time).
+    fn surely_contains(&self, p: Point) -> bool {
+        let v = self.shell.vertices();
+        if v.len() < 3 || !(p.x.is_finite() && p.y.is_finite()) {
+            return false;
+        }
+        // Inside a convex polygon: on the same side of every edge, whichever the winding.
+        let (mut pos, mut neg) = (true, true);
+        for (i, &a) in v.iter().enumerate() {
+            let b = v[(i + 1) % v.len()];
+            let (ex, ey) = (b.x - a.x, b.y - a.y);
+            let c = ex * (p.y - a.y) - ey * (p.x - a.x);
+            // Distance to the edge's line is |c| / |e|: compare squares.
+            let deep = c * c >= DEEP_INSIDE * DEEP_INSIDE * (ex * ex + ey * ey);
+            pos &= c > 0.0 && deep;
+            neg &= c < 0.0 && deep;
+            if !(pos || neg) {
+                return false;
+            }
+        }
+        pos || neg
+    }
+
+    /// Whether the shells intersect: accepted at once when `other`'s inner point lies deep
+    /// inside this shell (`surely_contains`), else parry2d's GJK test
+    /// ([`PreparedShell::intersects_gjk`]); the same answer as GJK alone. No bounding-box
+    /// early-out (the broad phase does that).
+    pub fn intersects_fast(&self, other: &PreparedShell) -> bool {
+        if matches!(self.shape, Local::Empty) || matches!(other.shape, Local::Empty) {
+            return false;
+        }
+        self.surely_contains(other.inner) || self.intersects_gjk(other)
     }
 
     /// parry2d's GJK intersection test, without any bounding-box early-out (the broad phase

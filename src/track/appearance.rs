@@ -14,8 +14,8 @@
 //! when the last view was a sliver at an occluder's edge).
 
 use crate::features::color::{
-    color_cost, color_cost_per_view, foreign_share, joint_palette, palette_distance, ColorConfig,
-    ColorSample,
+    color_cost, color_cost_per_view, foreign_share_at_least, joint_palette, palette_distance,
+    ColorConfig, ColorSample,
 };
 use crate::features::shape_context::{match_shapes, shape_cost_from_matches, ShapeContextConfig};
 use crate::features::sift::{match_descriptors, MatchConfig};
@@ -132,7 +132,7 @@ pub enum ColourMode {
 const RARE_LABEL: f64 = 0.03;
 
 /// Share of a detection's samples, each taken to its nearest colour of the reference view's
-/// own palette, that lie outside what the view has ([`foreign_share`]) from which
+/// own palette, that lie outside what the view has ([`foreign_share`](crate::features::color::foreign_share)) from which
 /// [`ColourMode::Contained`] rejects the pair without its joint palette, when the term's gate is
 /// at most [`SCREEN_MAX_GATE`].
 const SCREEN_SHARE: f64 = 0.9;
@@ -162,7 +162,7 @@ impl ColourCost {
     /// Whether a [`ColourMode::Contained`] pair is rejected before its joint palette: with a
     /// gate of at most [`SCREEN_MAX_GATE`], when at least [`SCREEN_SHARE`] of the detection's
     /// samples have no colour near a common one of the reference view's own palette
-    /// ([`foreign_share`]: the view's k-means runs once, the pair costs one pass over the
+    /// ([`foreign_share`](crate::features::color::foreign_share): the view's k-means runs once, the pair costs one pass over the
     /// detection's samples). Re-identification compares each new detection with every lost
     /// track in reach; in a crowd that was a joint k-means for each of ~100 pairs a frame on
     /// the 200-shape bench, and nearly all of them failed the gate (issue 10).
@@ -173,8 +173,8 @@ impl ColourCost {
         let Some(palette) = view.palette(&self.config) else {
             return false;
         };
-        foreign_share((a, palette), b, RARE_LABEL, &self.config)
-            .is_ok_and(|share| share >= SCREEN_SHARE)
+        foreign_share_at_least((a, palette), b, RARE_LABEL, SCREEN_SHARE, &self.config)
+            .unwrap_or(false)
     }
 }
 

@@ -4,7 +4,7 @@
 //! optimally. [`stages`] builds the list from a [`Config`]; the tracker runs it in turn.
 
 use super::config::Config;
-use super::cost::{Candidate, CostModel, PairScore};
+use super::cost::{Candidate, CheapTerms, CostModel, PairScore};
 use super::lifecycle::Track;
 use super::prepare::Prepared;
 use super::regions::Regions;
@@ -342,6 +342,26 @@ pub(crate) fn score_edges(
     dets: &[Prepared<'_>],
     keep: impl Fn(&(usize, usize)) -> bool,
 ) -> Vec<Edge> {
+    score_edges_reusing(
+        model,
+        tracks,
+        regions,
+        dets,
+        keep,
+        &mut CheapTerms::default(),
+    )
+}
+
+/// [`score_edges`], with the cheap terms of the kept pairs read from (or left in) `cheap`
+/// ([`CostModel::score_pairs_reusing`]).
+pub(crate) fn score_edges_reusing(
+    model: &CostModel,
+    tracks: &[Track],
+    regions: &Regions,
+    dets: &[Prepared<'_>],
+    keep: impl Fn(&(usize, usize)) -> bool,
+    cheap: &mut CheapTerms,
+) -> Vec<Edge> {
     let cands: Vec<Candidate<'_>> = dets.iter().map(Prepared::candidate).collect();
     // Tracks of different known classes never match (MOTS: cars are not pedestrians).
     let same_class = |t: usize, d: usize| {
@@ -362,7 +382,7 @@ pub(crate) fn score_edges(
         };
         &sub
     };
-    let scores = model.score_pairs(tracks, &cands, regions);
+    let scores = model.score_pairs_reusing(tracks, &cands, regions, cheap);
     regions
         .pairs
         .iter()

@@ -432,8 +432,25 @@ impl CostModel {
         dets: &[Candidate<'_>],
         regions: &Regions,
     ) -> Vec<Option<PairScore>> {
+        self.score_pairs_reusing(tracks, dets, regions, &mut CheapTerms::default())
+    }
+
+    /// [`CostModel::score_pairs`], reading the cheap terms from `cheap` when it holds them
+    /// for these pairs, and leaving them there otherwise: the tracker scores a frame's pairs
+    /// twice with the same model, geometry alone first (to see which detections need
+    /// appearance) and then with appearance, and the cheap terms (mask IoU above all) do not
+    /// change in between (issue 10: each was computed twice per pair and frame). The result
+    /// is the same as without the cache.
+    pub fn score_pairs_reusing(
+        &self,
+        tracks: &[Track],
+        dets: &[Candidate<'_>],
+        regions: &Regions,
+        cheap: &mut CheapTerms,
+    ) -> Vec<Option<PairScore>> {
         let nt = self.terms.len();
         let np = regions.pairs.len();
+        let reuse = cheap.pairs == regions.pairs && cheap.raw.len() == np * nt;
         let mut raw: Vec<Option<f64>> = Vec::with_capacity(np * nt);
         // Weight of the expensive terms that count towards the thresholded cost.
         let expensive_weight: f64 = self
@@ -454,11 +471,15 @@ impl CostModel {
                 continue;
             };
             let start = raw.len();
-            raw.extend(self.terms.iter().map(|w| {
-                (!w.term.expensive())
-                    .then(|| w.term.cost(t, d).filter(|c| c.is_finite()))
-                    .flatten()
-            }));
+            if reuse {
+                raw.extend_from_slice(&cheap.raw[start..start + nt]);
+            } else {
+                raw.extend(self.terms.iter().map(|w| {
+                    (!w.term.expensive())
+                        .then(|| w.term.cost(t, d).filter(|c| c.is_finite()))
+                        .flatten()
+                }));
+            }
             let cheap = &raw[start..];
             hopeless[p] = prefilter.is_some_and(|max_cost| {
                 let (mut num, mut den, mut gated) = (0.0, 0.0, false);
@@ -473,6 +494,10 @@ impl CostModel {
                 }
                 gated || (den > 0.0 && num / (den + expensive_weight) > max_cost)
             });
+        }
+        if !reuse {
+            cheap.pairs.clone_from(&regions.pairs);
+            cheap.raw.clone_from(&raw);
         }
         let ranked = self.rank_only_where_close(tracks.len(), dets.len(), regions, &raw, &hopeless);
         // Pass 2: the expensive terms of the pairs that could match; the cluster-normalised
@@ -644,6 +669,27 @@ impl CostModel {
                 }
             })
             .collect()
+    }
+}
+
+/// The cheap terms of a set of pairs, kept between two scorings of the same pairs with the
+/// same model ([`CostModel::score_pairs_reusing`]). Empty by default. The values belong to
+/// the tracks and detections they were computed on: [`CheapTerms::clear`] it when those
+/// change (a new frame), or the same pairs would read stale values.
+#[derive(Debug, Clone, Default)]
+pub struct CheapTerms {
+    /// The pairs the values belong to.
+    pairs: Vec<(usize, usize)>,
+    /// Per pair, each term's cost (`None` for the expensive terms and where a term has no
+    /// data), in [`CostModel::terms`] order.
+    raw: Vec<Option<f64>>,
+}
+
+impl CheapTerms {
+    /// Forgets the values (keeping the buffers, so a tracker reuses them frame after frame).
+    pub fn clear(&mut self) {
+        self.pairs.clear();
+        self.raw.clear();
     }
 }
 

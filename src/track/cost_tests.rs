@@ -80,32 +80,32 @@ impl PairCost for CountingNormalised {
     }
 }
 
-#[test]
-fn appearance_is_compared_only_where_it_could_change_a_preference() {
+/// A track born on a 40×80 box at `x`.
+fn track_at_x(x: f64) -> Track {
     use crate::motion::BoxKalman;
-    use crate::track::regions::Cluster;
     use crate::track::Config;
-    let track_at = |x: f64| {
-        let b = BBox::new(x, 0.0, 40.0, 80.0);
-        let motion = Box::new(BoxKalman::new(&b, Config::default().motion_params()).unwrap());
-        let det = Detection::from_box(b, 1.0);
-        Track::born(&det, &Features::default(), motion, None, 1, false, false)
-    };
-    let tracks = [track_at(0.0), track_at(200.0)];
-    // d0 on track 0, d1 on track 1, d2 overlapping track 0 (IoU 0.6: cost 0.4).
-    let dets = [0.0, 200.0, 10.0].map(|x| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), 1.0));
-    let cands: Vec<Candidate<'_>> = dets
-        .iter()
+    let b = BBox::new(x, 0.0, 40.0, 80.0);
+    let motion = Box::new(BoxKalman::new(&b, Config::default().motion_params()).unwrap());
+    let det = Detection::from_box(b, 1.0);
+    Track::born(&det, &Features::default(), motion, None, 1, false, false)
+}
+
+/// The candidates of `dets`, without features.
+fn candidates(dets: &[Detection]) -> Vec<Candidate<'_>> {
+    dets.iter()
         .enumerate()
         .map(|(index, detection)| Candidate {
             index,
             detection,
             features: None,
         })
-        .collect();
-    // One cluster holding every cross pair, as in a crowd.
-    let pairs = vec![(0, 0), (0, 1), (0, 2), (1, 0), (1, 1)];
-    let regions = Regions {
+        .collect()
+}
+
+/// `pairs` of tracks 0 and 1 and detections 0 to 2, all in one cluster (as in a crowd).
+fn one_cluster(pairs: Vec<(usize, usize)>) -> Regions {
+    use crate::track::regions::Cluster;
+    Regions {
         pair_cluster: vec![0; pairs.len()],
         pairs,
         clusters: vec![Cluster {
@@ -113,7 +113,17 @@ fn appearance_is_compared_only_where_it_could_change_a_preference() {
             dets: vec![0, 1, 2],
         }]
         .into(),
-    };
+    }
+}
+
+#[test]
+fn appearance_is_compared_only_where_it_could_change_a_preference() {
+    let tracks = [track_at_x(0.0), track_at_x(200.0)];
+    // d0 on track 0, d1 on track 1, d2 overlapping track 0 (IoU 0.6: cost 0.4).
+    let dets = [0.0, 200.0, 10.0].map(|x| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), 1.0));
+    let cands = candidates(&dets);
+    // One cluster holding every cross pair, as in a crowd.
+    let regions = one_cluster(vec![(0, 0), (0, 1), (0, 2), (1, 0), (1, 1)]);
     let calls = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let mut m = CostModel::default();
     m.push(Box::new(IouCost { buffer: 1.0 }), 1.0, None);
@@ -327,4 +337,49 @@ fn a_gated_pair_skips_its_remaining_appearance() {
         assert_eq!(second.load(Ordering::Relaxed), later_calls, "value {value}");
         assert_eq!(s[0].is_none(), value > gate);
     }
+}
+
+/// A second scoring of the same pairs reads their cheap terms from the first one's
+/// [`CheapTerms`] (not computing them again) and scores exactly as a scoring from scratch;
+/// other pairs are not read from it.
+#[test]
+fn a_second_scoring_reuses_the_cheap_terms_and_scores_alike() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let tracks = [track_at_x(0.0), track_at_x(30.0)];
+    let dets = [0.0, 25.0, 60.0].map(|x| Detection::from_box(BBox::new(x, 0.0, 40.0, 80.0), 1.0));
+    let cands = candidates(&dets);
+    let regions = one_cluster(vec![(0, 0), (0, 1), (1, 1), (1, 2)]);
+    let (cheap_calls, dear_calls) = (
+        std::sync::Arc::new(AtomicUsize::new(0)),
+        std::sync::Arc::new(AtomicUsize::new(0)),
+    );
+    let mut m = CostModel::default();
+    m.push(Box::new(IouCost { buffer: 1.0 }), 1.0, None);
+    m.push(
+        Box::new(FixedCounted(Some(0.2), false, cheap_calls.clone())),
+        0.5,
+        None,
+    );
+    m.push(Box::new(CountingNormalised(dear_calls.clone())), 0.5, None);
+    let fresh = m.score_pairs(&tracks, &cands, &regions);
+    assert_eq!(cheap_calls.swap(0, Ordering::Relaxed), 4);
+    let mut cache = CheapTerms::default();
+    let first = m.score_pairs_reusing(&tracks, &cands, &regions, &mut cache);
+    assert_eq!(cheap_calls.swap(0, Ordering::Relaxed), 4);
+    let dear_before = dear_calls.load(Ordering::Relaxed);
+    let second = m.score_pairs_reusing(&tracks, &cands, &regions, &mut cache);
+    // The cheap term is not asked again; the expensive one is, as before.
+    assert_eq!(cheap_calls.swap(0, Ordering::Relaxed), 0);
+    assert!(dear_calls.load(Ordering::Relaxed) > dear_before);
+    assert_eq!(first, fresh);
+    assert_eq!(second, fresh);
+    // Other pairs: computed, not read from the cache.
+    let fewer = Regions {
+        pairs: regions.pairs[..3].to_vec(),
+        pair_cluster: vec![0; 3],
+        clusters: regions.clusters.clone(),
+    };
+    let third = m.score_pairs_reusing(&tracks, &cands, &fewer, &mut cache);
+    assert_eq!(cheap_calls.swap(0, Ordering::Relaxed), 3);
+    assert_eq!(third, m.score_pairs(&tracks, &cands, &fewer));
 }

@@ -49,6 +49,7 @@ mod prepare;
 mod presets;
 pub mod regions;
 pub mod scores;
+mod search;
 pub mod sequence;
 mod timing;
 
@@ -57,7 +58,7 @@ pub use associate::{Stage, StageCosts, StageDetections, StageTracks};
 pub use coasting::Coasting;
 pub use config::{Config, Preset, ReportBox, ShapeVariant, TermConfig, Terms};
 pub use cost::{
-    Candidate, CentreDistanceCost, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,
+    Candidate, CentreDistanceCost, CheapTerms, CostModel, GiouCost, IoaCost, IouCost, LastIouCost,
     MahalanobisCost, MaskIouCost, PairCost, SizeCost, WeightedTerm,
 };
 pub use features::{

@@ -12,9 +12,10 @@
 //! - **predict**: every track's motion filter steps one frame (`Track::predict`).
 //! - **estimate regions** (thesis Alg. 2): box mode: the predicted boxes, grown by a margin
 //!   that widens while a track is unmatched, meet the detections' boxes
-//!   ([`estimate_regions`]). With masks: each track's search shell (`Track::search_shell`)
-//!   meets the detections' shells by GJK ([`crate::region::region_clusters`]). Only pairs
-//!   inside a cluster are ever scored.
+//!   ([`super::regions::estimate_regions`]). With masks: each track's search shell
+//!   (`Track::search_shell`) meets the detections' shells by GJK
+//!   ([`crate::region::region_clusters`]). Only pairs inside a cluster are ever scored. The
+//!   lost tracks that only re-identification looks for wait for its stage (`search`).
 //! - **describe** (`describe`): appearance for the detections of clusters that
 //!   geometry cannot decide.
 //! - **score pairs**: the [`CostModel`] combines the enabled [`PairCost`] terms per pair;
@@ -53,11 +54,13 @@ use std::borrow::Cow;
 use std::sync::Arc;
 
 use super::appearance::cost_models;
-use super::associate::{in_main, score_edges, Edge, Pair, Stage, StageCosts, StagePlan, Used};
+use super::associate::{
+    in_main, score_edges, score_edges_reusing, Edge, Pair, Stage, StageCosts, StagePlan, Used,
+};
 use super::camera::Camera;
 use super::coasting::GapStats;
 use super::config::{Config, ReportBox};
-use super::cost::{CostModel, PairCost};
+use super::cost::{CheapTerms, CostModel, PairCost};
 use super::describe::{ambiguous_detections, crowded_next_frame, Ambiguity};
 use super::estimate::NoiseFit;
 use super::features::{Appearance, FeatureExtractor, MaskFeatures, Needs};
@@ -65,15 +68,14 @@ use super::fragments::{merge_fragments, merged_views, Merge};
 use super::hindsight::Removed;
 use super::lifecycle::{two_mut, BoxMotion, Track};
 use super::prepare::{check_frame_size, kept, prepare, shape_of, validate, Prepared};
-use super::regions::{estimate_regions, Regions};
+use super::regions::Regions;
 use super::scores::{ScoreStats, Thresholds};
+use super::search::{frame_regions, in_frame_regions, reid_regions};
 use super::timing::{Phase, PhaseTimes, Timer};
 use super::TrackError;
 use crate::assign::Unmatched;
 use crate::frame::{BBox, Detection, Frame, TrackState, TrackedShape};
-use crate::geometry::ConvexShell;
 use crate::motion::{BoxKalman, MotionError, MotionFactory};
-use crate::region::region_clusters;
 
 /// Builds a new track's motion filter from its first box.
 type MotionBuilder = Box<dyn Fn(&BBox) -> Result<BoxMotion, MotionError> + Send>;
@@ -108,6 +110,9 @@ pub struct Tracker {
     /// How well each smoothing of the reported boxes has agreed with what came next in this
     /// sequence (see [`super::estimate`]).
     noise: NoiseFit,
+    /// The frame's cheap pair terms, kept between its two scorings (see `update`); emptied
+    /// at each frame, its buffers reused.
+    cheap: CheapTerms,
 }
 
 impl std::fmt::Debug for Tracker {
@@ -160,6 +165,7 @@ impl Tracker {
             timer: Timer::default(),
             camera: Camera::default(),
             noise: NoiseFit::default(),
+            cheap: CheapTerms::default(),
         })
     }
 
@@ -281,12 +287,19 @@ impl Tracker {
             t.predict();
             t.camera
                 .follow(&mut t.tracks, &dets, t.config.camera_motion);
-            t.estimate_regions(&dets)
+            frame_regions(&t.config, &t.tracks, &dets, frame.is_some())
         });
-        self.timed(Phase::Features, |t| t.describe(frame, &regions, &mut dets));
+        // The cheap terms of the pairs, when `describe` scores them by geometry first, are
+        // read again by the main scoring rather than computed twice.
+        let mut cheap = std::mem::take(&mut self.cheap);
+        cheap.clear();
+        self.timed(Phase::Features, |t| {
+            t.describe(frame, &regions, &mut dets, &mut cheap)
+        });
         let main = self.timed(Phase::Costs, |t| {
-            score_edges(&t.costs, &t.tracks, &regions, &dets, |_| true)
+            score_edges_reusing(&t.costs, &t.tracks, &regions, &dets, |_| true, &mut cheap)
         });
+        self.cheap = cheap;
         let matches = self.timed(Phase::Assignment, |t| {
             t.associate(frame, &main, &regions, &mut dets)
         })?;
@@ -360,54 +373,16 @@ impl Tracker {
         }
     }
 
-    /// Margin factor of a track's search region: grows while it is unmatched.
-    fn margin_factor(&self, t: &Track) -> f64 {
-        self.config.region_margin + self.config.region_margin_per_miss * t.misses() as f64
-    }
-
-    /// Which pairs are close enough to compare (thesis Alg. 2): boxes in box mode, shells by
-    /// GJK as soon as a detection or a track has a shell.
-    fn estimate_regions(&self, dets: &[Prepared<'_>]) -> Regions {
-        let shells_mode = dets.iter().any(|d| d.features.shell.is_some())
-            || self
-                .tracks
-                .iter()
-                .any(|t| t.features().is_some_and(|f| f.shell.is_some()));
-        if !shells_mode {
-            let shells: Vec<BBox> = self
-                .tracks
-                .iter()
-                .map(|t| {
-                    let f = self.margin_factor(t);
-                    let p = t.predicted_box();
-                    BBox::from_center(p.center(), p.w * (1.0 + 2.0 * f), p.h * (1.0 + 2.0 * f))
-                })
-                .collect();
-            let det_shells: Vec<BBox> = dets.iter().map(|d| d.det.bbox).collect();
-            return estimate_regions(&shells, &det_shells);
-        }
-        let track_shells: Vec<ConvexShell> = self
-            .tracks
-            .iter()
-            .map(|t| t.search_shell(self.margin_factor(t)))
-            .collect();
-        // Borrowed where the detection has its shell (no copy per detection and frame).
-        let det_shells: Vec<std::borrow::Cow<'_, ConvexShell>> = dets
-            .iter()
-            .map(|d| match &d.features.shell {
-                Some(s) => std::borrow::Cow::Borrowed(s.as_ref()),
-                None => {
-                    std::borrow::Cow::Owned(ConvexShell::from_bbox(&d.det.bbox).unwrap_or_default())
-                }
-            })
-            .collect();
-        Regions::from(region_clusters(&track_shells, &det_shells))
-    }
-
     /// Appearance for the detections geometry cannot decide (see `describe`). With
     /// [`Config::lost_reid_only`], the lost tracks outside the main association do not count:
     /// the reid stage describes the detections it needs once the others have taken theirs.
-    fn describe(&self, frame: Option<&Frame<'_>>, regions: &Regions, dets: &mut [Prepared<'_>]) {
+    fn describe(
+        &self,
+        frame: Option<&Frame<'_>>,
+        regions: &Regions,
+        dets: &mut [Prepared<'_>],
+        cheap: &mut CheapTerms,
+    ) {
         let Some(frame) = frame else {
             return;
         };
@@ -417,9 +392,14 @@ impl Tracker {
         let want = if self.config.appearance.lazy {
             let counted = |t: usize| self.tracks.get(t).is_some_and(|t| in_main(&self.config, t));
             // Detections carry no appearance yet, so the appearance terms have no data here.
-            let geometric = score_edges(&self.costs, &self.tracks, regions, dets, |&(t, _)| {
-                counted(t)
-            });
+            let geometric = score_edges_reusing(
+                &self.costs,
+                &self.tracks,
+                regions,
+                dets,
+                |&(t, _)| counted(t),
+                cheap,
+            );
             let ambiguity = Ambiguity {
                 max_cost: self.config.max_cost,
                 margin: self.config.appearance.ambiguity,
@@ -487,6 +467,28 @@ impl Tracker {
                 && !used.tracks[t]
                 && !used.dets[d]
                 && high.get(d).copied().unwrap_or(false)
+        };
+        // The lost tracks the frame's regions left out are met with the detections still
+        // free (see `search::in_frame_regions`); otherwise the frame's regions have every pair.
+        let has_frame = frame.is_some();
+        let own;
+        let regions = if self
+            .tracks
+            .iter()
+            .all(|t| in_frame_regions(&self.config, t, has_frame))
+        {
+            regions
+        } else {
+            let cfg = &self.config;
+            let found = self.timer.time(Phase::Regions, || {
+                reid_regions(cfg, &self.tracks, dets, &used.tracks, &used.dets)
+            });
+            // Nothing to re-identify (most frames of a sparse scene): no edges.
+            let Some(found) = found else {
+                return Vec::new();
+            };
+            own = found;
+            &own
         };
         if let (Some(frame), false) = (frame, self.needs.is_empty()) {
             let mut need = vec![false; dets.len()];

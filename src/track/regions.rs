@@ -72,6 +72,33 @@ impl From<crate::region::RegionEstimate> for Regions {
     }
 }
 
+impl Regions {
+    /// These regions, estimated on subsets of the tracks and detections (indices into
+    /// `tracks` and `dets`, each ascending), in the indices of the full lists: the pairs stay
+    /// sorted and the clusters in the order of their smallest track. In place: no allocation
+    /// (the clusters were just built, so nothing else shares them).
+    pub(crate) fn remapped(mut self, tracks: &[usize], dets: &[usize]) -> Self {
+        let t = |i: usize| tracks.get(i).copied().unwrap_or(usize::MAX);
+        let d = |j: usize| dets.get(j).copied().unwrap_or(usize::MAX);
+        for p in &mut self.pairs {
+            *p = (t(p.0), d(p.1));
+        }
+        let remap = |c: &mut Cluster| {
+            c.tracks.iter_mut().for_each(|i| *i = t(*i));
+            c.dets.iter_mut().for_each(|j| *j = d(*j));
+        };
+        match Arc::get_mut(&mut self.clusters) {
+            Some(clusters) => clusters.iter_mut().for_each(remap),
+            None => {
+                let mut clusters = self.clusters.to_vec();
+                clusters.iter_mut().for_each(remap);
+                self.clusters = clusters.into();
+            }
+        }
+        self
+    }
+}
+
 /// Strict overlap of two boxes with positive area; zero-size shells meet nothing.
 fn meets(a: &BBox, b: &BBox) -> bool {
     a.overlaps(b)
