@@ -375,7 +375,9 @@ impl Tracker {
 
     /// Appearance for the detections geometry cannot decide (see `describe`). With
     /// [`Config::lost_reid_only`], the lost tracks outside the main association do not count:
-    /// the reid stage describes the detections it needs once the others have taken theirs.
+    /// they are not in the frame's regions (`search::in_frame_regions`, on a frame with its
+    /// image, the only kind described here), and the reid stage describes the detections it
+    /// needs once the others have taken theirs.
     fn describe(
         &self,
         frame: Option<&Frame<'_>>,
@@ -390,16 +392,11 @@ impl Tracker {
             return;
         }
         let want = if self.config.appearance.lazy {
-            let counted = |t: usize| self.tracks.get(t).is_some_and(|t| in_main(&self.config, t));
             // Detections carry no appearance yet, so the appearance terms have no data here.
-            let geometric = score_edges_reusing(
-                &self.costs,
-                &self.tracks,
-                regions,
-                dets,
-                |&(t, _)| counted(t),
-                cheap,
-            );
+            // Every pair of the frame's regions, as the main scoring reads them: that scoring
+            // then reuses these cheap terms.
+            let geometric =
+                score_edges_reusing(&self.costs, &self.tracks, regions, dets, |_| true, cheap);
             let ambiguity = Ambiguity {
                 max_cost: self.config.max_cost,
                 margin: self.config.appearance.ambiguity,
