@@ -226,7 +226,10 @@ fn quality_gate() {
          (if intended, regenerate with REGENERATE=1 cargo test --release --test quality_gate)",
         bad.join("\n  ")
     );
-    if now != base {
+    // Compared as the baseline was read back: serde_json's float parsing is not exact, so the
+    // scores just computed differ in the last bit from the same scores written and read.
+    let read_back: Baseline = serde_json::from_str(&serde_json::to_string(&now).unwrap()).unwrap();
+    if read_back != base {
         eprintln!("scores improved on the baseline; consider regenerating it");
     }
 }

@@ -675,9 +675,10 @@ pub fn foreign_share(
     rare: f64,
     cfg: &ColorConfig,
 ) -> Result<f64, ColorError> {
-    let n = b.rgb.len();
-    let foreign = count_foreign((a, pa), b, rare, cfg, |_, _| false)?;
-    Ok(foreign as f64 / n as f64)
+    cfg.validate()?;
+    let view = ViewReach::new(a, pa)?;
+    let foreign = count_foreign(&view, b, rare, cfg, |_, _| false)?;
+    Ok(foreign as f64 / b.rgb.len() as f64)
 }
 
 /// Whether [`foreign_share`] is at least `min_share`, decided as soon as the samples counted
@@ -691,53 +692,90 @@ pub fn foreign_share_at_least(
     min_share: f64,
     cfg: &ColorConfig,
 ) -> Result<bool, ColorError> {
+    cfg.validate()?;
+    let view = ViewReach::new(a, pa)?;
+    foreign_share_at_least_in(&view, b, rare, min_share, cfg)
+}
+
+/// [`foreign_share_at_least`] against a view's [`ViewReach`], built once per view: a lost
+/// track's reference view meets every free detection in reach, frame after frame, and
+/// rebuilding the view's side per pair was two thirds of each comparison (issue 10). The
+/// same answer as [`foreign_share_at_least`] with the view and palette it was built from.
+pub fn foreign_share_at_least_in(
+    view: &ViewReach,
+    b: &ColorSample,
+    rare: f64,
+    min_share: f64,
+    cfg: &ColorConfig,
+) -> Result<bool, ColorError> {
     let n = b.rgb.len();
     let share = |k: usize| k as f64 / n as f64;
     // `foreign` only grows and `foreign + unseen` only shrinks, so each bound, once past
     // `min_share`, stays past it: the final share lies between them.
-    let foreign = count_foreign((a, pa), b, rare, cfg, |foreign, seen| {
+    let foreign = count_foreign(view, b, rare, cfg, |foreign, seen| {
         share(foreign) >= min_share || share(foreign + (n - seen)) < min_share
     })?;
     Ok(share(foreign) >= min_share)
 }
 
-/// The number of `b`'s samples foreign to the view `a` (see [`foreign_share`]), counting in
+/// What [`foreign_share`] reads of the view `a` besides its samples: its palette's colours,
+/// each colour's share of the view's samples, and each colour's reach (the distance from it to
+/// the farthest of the view's samples it labels).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewReach {
+    centroids: Vec<[f64; 3]>,
+    share: Vec<f64>,
+    reach: Vec<f64>,
+}
+
+impl ViewReach {
+    /// The view `a` with its own palette `pa` ([`view_palette`]).
+    pub fn new(a: &ColorSample, pa: &ViewPalette) -> Result<Self, ColorError> {
+        let a = checked(a)?;
+        if pa.labels.len() != a.len() || pa.centroids.is_empty() {
+            return Err(ColorError::LengthMismatch {
+                positions: a.len(),
+                rgb: pa.labels.len(),
+            });
+        }
+        // Each palette colour's reach, from the view's own samples: a colour k-means fitted
+        // to a broad spread of shades covers a wider neighbourhood than a tight one. Kept
+        // squared and rooted once per colour: the root is monotone, so the root of the
+        // largest square is the largest root, bit for bit.
+        let k = pa.centroids.len();
+        let mut reach = vec![0.0f64; k];
+        for (c, &l) in a.rgb.iter().zip(&pa.labels) {
+            if let (Some(r), Some(centroid)) = (reach.get_mut(l), pa.centroids.get(l)) {
+                *r = r.max(distance2(&c.map(f64::from), centroid));
+            }
+        }
+        reach.iter_mut().for_each(|r| *r = r.sqrt());
+        Ok(Self {
+            centroids: pa.centroids.clone(),
+            share: pa.histogram(),
+            reach,
+        })
+    }
+}
+
+/// The number of `b`'s samples foreign to the view (see [`foreign_share`]), counting in
 /// order and stopping early once `stop(foreign so far, samples seen)` says so.
 fn count_foreign(
-    (a, pa): (&ColorSample, &ViewPalette),
+    view: &ViewReach,
     b: &ColorSample,
     rare: f64,
     cfg: &ColorConfig,
     stop: impl Fn(usize, usize) -> bool,
 ) -> Result<usize, ColorError> {
     cfg.validate()?;
-    let a = checked(a)?;
     let b = checked(b)?;
     if b.rgb.is_empty() {
         return Err(ColorError::EmptySample { which: "B" });
     }
-    if pa.labels.len() != a.len() || pa.centroids.is_empty() {
-        return Err(ColorError::LengthMismatch {
-            positions: a.len(),
-            rgb: pa.labels.len(),
-        });
-    }
-    // Each palette colour's reach, from the view's own samples: a colour k-means fitted to a
-    // broad spread of shades covers a wider neighbourhood than a tight one. Kept squared
-    // and rooted once per colour: the root is monotone, so the root of the largest square
-    // is the largest root, bit for bit.
-    let k = pa.centroids.len();
-    let mut reach = vec![0.0f64; k];
-    for (c, &l) in a.rgb.iter().zip(&pa.labels) {
-        if let (Some(r), Some(centroid)) = (reach.get_mut(l), pa.centroids.get(l)) {
-            *r = r.max(distance2(&c.map(f64::from), centroid));
-        }
-    }
-    reach.iter_mut().for_each(|r| *r = r.sqrt());
-    let share = pa.histogram();
+    let (share, reach) = (&view.share, &view.reach);
     let mut foreign = 0;
     for (seen, c) in b.rgb.iter().enumerate() {
-        let (l, d2, _) = closest_two(&pa.centroids, &c.map(f64::from));
+        let (l, d2, _) = closest_two(&view.centroids, &c.map(f64::from));
         let common = share.get(l).is_some_and(|&h| h >= rare);
         let near = reach
             .get(l)
@@ -1143,17 +1181,27 @@ mod tests {
                 joined(&parts)
             };
             let a = mix(&mut next);
-            let b = mix(&mut next);
             let pa = view_palette(&a, &cfg).unwrap();
-            let min_share = [0.0, 0.1, 0.5, 0.9, 1.0][case % 5];
-            let full = foreign_share((&a, &pa), &b, 0.03, &cfg).unwrap();
-            let early = foreign_share_at_least((&a, &pa), &b, 0.03, min_share, &cfg).unwrap();
-            assert_eq!(
-                early,
-                full >= min_share,
-                "case {case}: share {full}, at {min_share}"
-            );
-            decided[usize::from(early)] += 1;
+            // One view's reach, built once and read by several detections, as the
+            // re-identification screen reads a lost track's.
+            let view = ViewReach::new(&a, &pa).unwrap();
+            for probe in 0..3 {
+                let b = mix(&mut next);
+                let min_share = [0.0, 0.1, 0.5, 0.9, 1.0][(case + probe) % 5];
+                let full = foreign_share((&a, &pa), &b, 0.03, &cfg).unwrap();
+                let early = foreign_share_at_least((&a, &pa), &b, 0.03, min_share, &cfg).unwrap();
+                let cached = foreign_share_at_least_in(&view, &b, 0.03, min_share, &cfg).unwrap();
+                assert_eq!(
+                    early,
+                    full >= min_share,
+                    "case {case}: share {full}, at {min_share}"
+                );
+                assert_eq!(
+                    cached, early,
+                    "case {case}.{probe}: the cached view disagrees"
+                );
+                decided[usize::from(early)] += 1;
+            }
         }
         assert!(decided[0] > 30 && decided[1] > 30, "{decided:?}");
     }
@@ -1240,6 +1288,11 @@ mod tests {
         assert!(foreign_share((&a, &pa), &ColorSample::default(), 0.03, &cfg).is_err());
         let other = view_palette(&samples(5, red), &cfg).unwrap();
         assert!(foreign_share((&a, &other), &samples(3, red), 0.03, &cfg).is_err());
+        // The cached view checks the same: a palette of another view, and an empty detection.
+        assert!(ViewReach::new(&a, &other).is_err());
+        let view = ViewReach::new(&a, &pa).unwrap();
+        let empty = ColorSample::default();
+        assert!(foreign_share_at_least_in(&view, &empty, 0.03, 0.5, &cfg).is_err());
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //! when the last view was a sliver at an occluder's edge).
 
 use crate::features::color::{
-    color_cost, color_cost_per_view, foreign_share_at_least, joint_palette, palette_distance,
+    color_cost, color_cost_per_view, foreign_share_at_least_in, joint_palette, palette_distance,
     ColorConfig, ColorSample,
 };
 use crate::features::shape_context::{match_shapes, shape_cost_from_matches, ShapeContextConfig};
@@ -162,19 +162,20 @@ impl ColourCost {
     /// Whether a [`ColourMode::Contained`] pair is rejected before its joint palette: with a
     /// gate of at most [`SCREEN_MAX_GATE`], when at least [`SCREEN_SHARE`] of the detection's
     /// samples have no colour near a common one of the reference view's own palette
-    /// ([`foreign_share`](crate::features::color::foreign_share): the view's k-means runs once, the pair costs one pass over the
-    /// detection's samples). Re-identification compares each new detection with every lost
-    /// track in reach; in a crowd that was a joint k-means for each of ~100 pairs a frame on
-    /// the 200-shape bench, and nearly all of them failed the gate (issue 10).
-    fn screened(&self, view: &Appearance, a: &ColorSample, b: &ColorSample) -> bool {
+    /// ([`foreign_share`](crate::features::color::foreign_share)): the view's k-means and its
+    /// colours' reaches are computed once per view ([`Appearance::colour_reach`]), the pair
+    /// costs one pass over the detection's samples, often cut short. Re-identification
+    /// compares each new detection with every lost track in reach; in a crowd that was a joint
+    /// k-means for each of ~100 pairs a frame on the 200-shape bench, and nearly all of them
+    /// failed the gate (issue 10).
+    fn screened(&self, view: &Appearance, b: &ColorSample) -> bool {
         if !self.gate.is_some_and(|g| g <= SCREEN_MAX_GATE) {
             return false;
         }
-        let Some(palette) = view.palette(&self.config) else {
+        let Some(reach) = view.colour_reach(&self.config) else {
             return false;
         };
-        foreign_share_at_least((a, palette), b, RARE_LABEL, SCREEN_SHARE, &self.config)
-            .unwrap_or(false)
+        foreign_share_at_least_in(reach, b, RARE_LABEL, SCREEN_SHARE, &self.config).unwrap_or(false)
     }
 }
 
@@ -201,7 +202,7 @@ impl PairCost for ColourCost {
             ColourMode::Aligned => color_cost(ca, cb, None, &self.config).ok()?.cost,
             ColourMode::Palette => palette_distance(ca, cb, &self.config).ok()?,
             ColourMode::Contained => {
-                if self.screened(a, ca, cb) {
+                if self.screened(a, cb) {
                     return Some(1.0);
                 }
                 let p = joint_palette(ca, cb, &self.config).ok()?;

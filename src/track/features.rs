@@ -28,7 +28,7 @@ use std::sync::{Arc, OnceLock};
 
 use serde::{Deserialize, Serialize};
 
-use crate::features::color::{view_palette, ColorConfig, ColorSample, ViewPalette};
+use crate::features::color::{view_palette, ColorConfig, ColorSample, ViewPalette, ViewReach};
 use crate::features::shape_context::{ShapeContextConfig, ShapeDescriptor};
 use crate::features::sift::{RegionCrop, SiftConfig, SiftFeatures};
 use crate::features::transform::CellIndex;
@@ -281,6 +281,9 @@ pub struct Appearance {
     /// The colour sample's positions indexed, built on first read
     /// ([`Appearance::colour_index`]).
     colour_index: OnceLock<Option<CellIndex>>,
+    /// The palette's colours with their shares and reaches, built on first read
+    /// ([`Appearance::colour_reach`]).
+    colour_reach: OnceLock<Option<ViewReach>>,
 }
 
 impl Appearance {
@@ -298,6 +301,7 @@ impl Appearance {
             colour,
             palette: OnceLock::new(),
             colour_index: OnceLock::new(),
+            colour_reach: OnceLock::new(),
         }
     }
 
@@ -315,6 +319,15 @@ impl Appearance {
     pub fn palette(&self, cfg: &ColorConfig) -> Option<&ViewPalette> {
         self.palette
             .get_or_init(|| view_palette(self.colour.as_ref()?, cfg).ok())
+            .as_ref()
+    }
+
+    /// The colour sample's [`ViewReach`] over its own palette ([`Appearance::palette`], with
+    /// `cfg`), built on the first read: what the re-identification screen compares each
+    /// candidate's colours with (`track::ColourCost`); `None` without a colour sample.
+    pub fn colour_reach(&self, cfg: &ColorConfig) -> Option<&ViewReach> {
+        self.colour_reach
+            .get_or_init(|| ViewReach::new(self.colour.as_ref()?, self.palette(cfg)?).ok())
             .as_ref()
     }
 
