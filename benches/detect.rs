@@ -85,7 +85,7 @@ fn foreground(w: u32, h: u32) -> Vec<u8> {
 
 fn bench_stages(c: &mut Criterion) {
     let mut g = c.benchmark_group("stages");
-    for (w, h) in [(640u32, 480u32), (1280, 720)] {
+    for (w, h) in [(640u32, 480u32), (1280, 720), (1920, 1080)] {
         let bits = foreground(w, h);
         let size = format!("{w}x{h}");
         let mut m = Morphology::new();
