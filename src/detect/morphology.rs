@@ -179,6 +179,62 @@ mod tests {
     }
 
     #[test]
+    fn sparse_bitmaps_match_brute_force() {
+        // What a thresholded frame looks like: empty rows, a few objects, specks, foreground on
+        // the image's edge columns and rows, where the passes' border rule decides.
+        let mut s = 4242u32;
+        let mut rnd = |n: u32| {
+            s = s.wrapping_mul(1_103_515_245).wrapping_add(12345);
+            (s >> 16) % n
+        };
+        let mut m = Morphology::new();
+        for (w, h) in [
+            (1, 9),
+            (2, 6),
+            (3, 3),
+            (17, 11),
+            (40, 30),
+            (64, 20),
+            (101, 37),
+        ] {
+            for _ in 0..20 {
+                let mut bits = vec![0u8; w * h];
+                for _ in 0..rnd(4) {
+                    let (x0, y0) = (rnd(w as u32) as usize, rnd(h as u32) as usize);
+                    let (x1, y1) = (
+                        (x0 + 1 + rnd(12) as usize).min(w),
+                        (y0 + 1 + rnd(9) as usize).min(h),
+                    );
+                    for y in y0..y1 {
+                        bits[y * w + x0..y * w + x1].fill(1);
+                    }
+                }
+                for _ in 0..rnd(6) {
+                    let i = rnd((w * h) as u32) as usize;
+                    bits[i] ^= 1;
+                }
+                if rnd(2) == 0 {
+                    let y = rnd(h as u32) as usize;
+                    bits[y * w] = 1;
+                    bits[y * w + w - 1] = 1;
+                }
+                for r in 1..=2 {
+                    for erode in [true, false] {
+                        let mut got = bits.clone();
+                        if erode {
+                            m.erode(&mut got, w, h, r);
+                        } else {
+                            m.dilate(&mut got, w, h, r);
+                        }
+                        let want = reference(&bits, w, h, r as i64, erode);
+                        assert_eq!(got, want, "{w}x{h} r{r} erode {erode}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn opening_removes_specks_and_closing_fills_holes() {
         let (w, h) = (20, 20);
         let mut bits = vec![0u8; w * h];
