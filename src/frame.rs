@@ -5,6 +5,7 @@
 //! Boxes follow MOTChallenge: top-left corner plus width and height, in `f64` so that metrics
 //! computed on them equal the reference evaluators' (which use double precision).
 
+use crate::runs::{first_nonzero, last_nonzero};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -576,10 +577,8 @@ fn foreground_box(x: i32, y: i32, width: u32, data: &[u8]) -> BBox {
     }
     let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
     for (ly, row) in data.chunks_exact(width as usize).enumerate() {
-        if let (Some(a), Some(b)) = (
-            row.iter().position(|&v| v != 0),
-            row.iter().rposition(|&v| v != 0),
-        ) {
+        // A word at a time: every mask built is scanned here (issue 10).
+        if let (Some(a), Some(b)) = (first_nonzero(row), last_nonzero(row)) {
             x0 = x0.min(a as i64);
             x1 = x1.max(b as i64);
             y0 = y0.min(ly as i64);
@@ -646,16 +645,12 @@ impl Mask {
             });
         }
         let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0u32, 0u32);
-        for y in 0..img_h {
-            let row = &full[(y * img_w) as usize..((y + 1) * img_w) as usize];
-            for (x, &v) in row.iter().enumerate() {
-                if v != 0 {
-                    let x = x as u32;
-                    x0 = x0.min(x);
-                    x1 = x1.max(x);
-                    y0 = y0.min(y);
-                    y1 = y1.max(y);
-                }
+        for (y, row) in (0u32..).zip(full.chunks_exact(img_w.max(1) as usize)) {
+            if let (Some(a), Some(b)) = (first_nonzero(row), last_nonzero(row)) {
+                x0 = x0.min(a as u32);
+                x1 = x1.max(b as u32);
+                y0 = y0.min(y);
+                y1 = y1.max(y);
             }
         }
         if x0 == u32::MAX {

@@ -40,6 +40,7 @@ pub mod grid;
 pub mod io;
 pub mod motion;
 pub mod region;
+mod runs;
 pub mod settings;
 pub mod synth;
 pub mod track;

@@ -8,6 +8,7 @@
 
 use super::DetectError;
 use crate::frame::{BBox, Mask};
+use crate::runs::{first_nonzero, first_zero};
 
 /// Which neighbours make pixels connected. In settings it is written as the neighbour count,
 /// `4` or `8`, as image-processing libraries name it.
@@ -100,44 +101,6 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
         i = parent[i as usize];
     }
     i
-}
-
-const ONES: u64 = 0x0101_0101_0101_0101;
-const HIGHS: u64 = 0x8080_8080_8080_8080;
-
-/// Index of the first byte of `row` that `byte` accepts, 8 bytes at a time: `word` marks, in
-/// a little-endian word of 8 bytes, at least the first accepted byte with a set bit inside it
-/// and no bit in the bytes before it. The labeller scans every row of a full frame, most of
-/// it background (byte by byte these scans were a seventh of the background subtractor's
-/// time at 1920×1080 in wasm).
-fn first_where(row: &[u8], word: impl Fn(u64) -> u64, byte: impl Fn(u8) -> bool) -> Option<usize> {
-    let mut words = row.chunks_exact(8);
-    for (k, chunk) in words.by_ref().enumerate() {
-        let mut a = [0u8; 8];
-        a.copy_from_slice(chunk);
-        let hits = word(u64::from_le_bytes(a));
-        if hits != 0 {
-            return Some(8 * k + (hits.trailing_zeros() / 8) as usize);
-        }
-    }
-    let done = row.len() - words.remainder().len();
-    words
-        .remainder()
-        .iter()
-        .position(|&v| byte(v))
-        .map(|p| done + p)
-}
-
-/// Index of the first non-zero byte.
-fn first_nonzero(row: &[u8]) -> Option<usize> {
-    first_where(row, |x| x, |v| v != 0)
-}
-
-/// Index of the first zero byte (`row.len()` when none).
-fn first_zero(row: &[u8]) -> usize {
-    // The high bit of each zero byte is set, and possibly those of bytes above the first zero
-    // one (a borrow): the lowest is exact.
-    first_where(row, |x| x.wrapping_sub(ONES) & !x & HIGHS, |v| v == 0).unwrap_or(row.len())
 }
 
 impl Components {
@@ -286,37 +249,6 @@ impl Components {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_word_scans_find_what_a_byte_scan_finds() {
-        let mut s = 99u32;
-        for len in 0..70 {
-            for _ in 0..40 {
-                // Long runs of one kind, and foreground written as 1 or as any other byte.
-                let mut row = Vec::with_capacity(len + 20);
-                while row.len() < len {
-                    s = s.wrapping_mul(1_103_515_245).wrapping_add(12345);
-                    let v = match (s >> 16) % 8 {
-                        0..=3 => 0,
-                        4..=5 => 1,
-                        6 => 0x80,
-                        _ => 0xff,
-                    };
-                    let n = 1 + (s >> 8) as usize % 20;
-                    row.extend(std::iter::repeat_n(v, n));
-                }
-                row.truncate(len);
-                for from in 0..=len {
-                    let r = &row[from..];
-                    assert_eq!(first_nonzero(r), r.iter().position(|&v| v != 0));
-                    assert_eq!(
-                        first_zero(r),
-                        r.iter().position(|&v| v == 0).unwrap_or(r.len())
-                    );
-                }
-            }
-        }
-    }
 
     /// Flood-fill reference labelling.
     fn reference(bits: &[u8], w: usize, h: usize, eight: bool) -> Vec<Vec<(usize, usize)>> {

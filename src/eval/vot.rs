@@ -220,19 +220,10 @@ mod exact {
         let w = m.width() as usize;
         for (ly, row) in m.data().chunks(w.max(1)).enumerate() {
             let y = (m.y() as i64 + ly as i64) as f64;
-            let mut x = 0;
-            while x < row.len() {
-                if row[x] == 0 {
-                    x += 1;
-                    continue;
-                }
-                let start = x;
-                while x < row.len() && row[x] != 0 {
-                    x += 1;
-                }
+            for (start, end) in crate::runs::runs(row) {
                 let (a, b) = (
                     (m.x() as i64 + start as i64) as f64,
-                    (m.x() as i64 + x as i64) as f64,
+                    (m.x() as i64 + end as i64) as f64,
                 );
                 segs.push(Seg {
                     x0: a,

@@ -12,6 +12,7 @@ use spade::{DelaunayTriangulation, Point2, Triangulation};
 use super::gjk::PreparedShell;
 use super::GeometryError;
 use crate::frame::{BBox, Mask, Point};
+use crate::runs::{first_nonzero, last_nonzero};
 
 /// Distance under which two shells count as touching, in pixels.
 ///
@@ -479,10 +480,7 @@ pub fn pixel_hull(mask: &Mask) -> ConvexShell {
         _ => transposed.extend([Point::new(y, l), Point::new(y, r)]),
     };
     for (ly, row) in mask.data().chunks_exact(w).enumerate() {
-        let (Some(a), Some(b)) = (
-            row.iter().position(|&v| v != 0),
-            row.iter().rposition(|&v| v != 0),
-        ) else {
+        let (Some(a), Some(b)) = (first_nonzero(row), last_nonzero(row)) else {
             continue;
         };
         let y = y0 + ly as f64;
