@@ -24,14 +24,31 @@ pub struct Moments {
     pub mu11: f64,
 }
 
-/// `0² + 1² + … + (m − 1)²` (in 128 bits: no bitmap width overflows it).
-fn squares_below(m: u64) -> u128 {
+/// `0² + 1² + … + (m − 1)²` for `m ≤ 2²⁰` ([`WORD_ROWS`]), exactly: the product
+/// `(m − 1)·m·(2m − 1) < 2⁶¹` fits in 64 bits.
+fn squares_below(m: u64) -> u64 {
+    if m == 0 {
+        return 0;
+    }
+    (m - 1) * m * (2 * m - 1) / 6
+}
+
+/// [`squares_below`] for any `m` (in 128 bits), for rows wider than [`WORD_ROWS`].
+fn squares_below_wide(m: u64) -> u128 {
     let m = u128::from(m);
     if m == 0 {
         return 0;
     }
     (m - 1) * m * (2 * m - 1) / 6
 }
+
+/// The widest row whose closed-form sums [`Moments::of_mask`] computes in 64 bits: a row's
+/// `Σx² < w³/3 ≤ 2⁶⁰` and [`squares_below`]'s product `< 2⁶¹`. Masks are capped far below
+/// (`io::limits`: 65536 per side), so the 128-bit path is a guard only. In wasm every 128-bit
+/// multiply, divide and conversion to `f64` is a call into compiler-builtins (`__multi3`,
+/// `__udivti3`, `__floatuntidf`): ~4 % of the browser build's tracker time on the demo scene,
+/// where natively they are a few instructions (issue 10).
+const WORD_ROWS: usize = 1 << 20;
 
 /// Raw sums of a mask's pixel coordinates, added a row at a time, in local (bitmap)
 /// coordinates.
@@ -92,14 +109,28 @@ impl Moments {
         // tracker in wasm (issue 10). The integers are those the per-pixel float sums held
         // exactly (below 2⁵³), so the moments are the same bit for bit.
         for (ly, row) in mask.data().chunks_exact(w).enumerate() {
-            let (mut rn, mut rx, mut rxx) = (0u64, 0u128, 0u128);
-            for (a, b) in runs(row) {
-                let (a, b) = (a as u64, b as u64);
-                rn += b - a;
-                rx += u128::from(a + b - 1) * u128::from(b - a) / 2;
-                rxx += squares_below(b) - squares_below(a);
-            }
-            sums.add_row(ly as f64, rn, rx as f64, rxx as f64);
+            // The same integers either way, so the same f64s: a conversion rounds the value,
+            // whatever its width.
+            let (rn, rx, rxx) = if w <= WORD_ROWS {
+                let (mut rn, mut rx, mut rxx) = (0u64, 0u64, 0u64);
+                for (a, b) in runs(row) {
+                    let (a, b) = (a as u64, b as u64);
+                    rn += b - a;
+                    rx += (a + b - 1) * (b - a) / 2;
+                    rxx += squares_below(b) - squares_below(a);
+                }
+                (rn, rx as f64, rxx as f64)
+            } else {
+                let (mut rn, mut rx, mut rxx) = (0u64, 0u128, 0u128);
+                for (a, b) in runs(row) {
+                    let (a, b) = (a as u64, b as u64);
+                    rn += b - a;
+                    rx += u128::from(a + b - 1) * u128::from(b - a) / 2;
+                    rxx += squares_below_wide(b) - squares_below_wide(a);
+                }
+                (rn, rx as f64, rxx as f64)
+            };
+            sums.add_row(ly as f64, rn, rx, rxx);
         }
         sums.moments(mask)
     }
@@ -214,6 +245,24 @@ mod tests {
             d.truncate((w * h) as usize);
             let m = Mask::new(next(2000) as i32 - 1000, next(2000) as i32, w, h, d).unwrap();
             assert_eq!(Moments::of_mask(&m), per_pixel(&m));
+        }
+    }
+
+    #[test]
+    fn the_64_bit_row_sums_equal_the_128_bit_ones_up_to_their_bound() {
+        // The closed form itself, at and near the widest row the 64-bit path takes.
+        for m in (0..2000u64).chain((WORD_ROWS as u64 - 2000)..=WORD_ROWS as u64) {
+            assert_eq!(u128::from(squares_below(m)), squares_below_wide(m), "m = {m}");
+        }
+        // A row as wide as the bound, and one past it (the 128-bit path), with runs at both
+        // ends: the same moments as the per-pixel sums.
+        for w in [WORD_ROWS, WORD_ROWS + 1] {
+            let mut d = vec![0u8; w];
+            d[..3].fill(1);
+            d[w / 2..w / 2 + 1000].fill(1);
+            d[w - 5..].fill(1);
+            let m = Mask::new(-7, 3, w as u32, 1, d).unwrap();
+            assert_eq!(Moments::of_mask(&m), per_pixel(&m), "w = {w}");
         }
     }
 
