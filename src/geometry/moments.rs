@@ -33,21 +33,20 @@ fn squares_below(m: u64) -> u64 {
     (m - 1) * m * (2 * m - 1) / 6
 }
 
-/// [`squares_below`] for any `m` (in 128 bits), for rows wider than [`WORD_ROWS`].
-fn squares_below_wide(m: u64) -> u128 {
-    let m = u128::from(m);
-    if m == 0 {
-        return 0;
-    }
-    (m - 1) * m * (2 * m - 1) / 6
+/// [`squares_below`] in floating point, for rows wider than [`WORD_ROWS`] (none reaches the
+/// tracker: `io::limits` caps a side at 65536).
+fn squares_below_f64(m: u64) -> f64 {
+    let m = m as f64;
+    (m - 1.0) * m * (2.0 * m - 1.0) / 6.0
 }
 
 /// The widest row whose closed-form sums [`Moments::of_mask`] computes in 64 bits: a row's
 /// `Σx² < w³/3 ≤ 2⁶⁰` and [`squares_below`]'s product `< 2⁶¹`. Masks are capped far below
-/// (`io::limits`: 65536 per side), so the 128-bit path is a guard only. In wasm every 128-bit
-/// multiply, divide and conversion to `f64` is a call into compiler-builtins (`__multi3`,
-/// `__udivti3`, `__floatuntidf`): ~4 % of the browser build's tracker time on the demo scene,
-/// where natively they are a few instructions (issue 10).
+/// (`io::limits`: 65536 per side), so the floating-point path for wider rows is a guard only
+/// (its sums pass 2⁵³, where the per-pixel sums were not exact either). The sums were in 128
+/// bits before: in wasm every 128-bit multiply, divide and conversion to `f64` is a call into
+/// compiler-builtins (`__multi3`, `__udivti3`, `__floatuntidf`), ~4 % of the browser build's
+/// tracker time on the demo scene, where natively they are a few instructions (issue 10).
 const WORD_ROWS: usize = 1 << 20;
 
 /// Raw sums of a mask's pixel coordinates, added a row at a time, in local (bitmap)
@@ -121,14 +120,14 @@ impl Moments {
                 }
                 (rn, rx as f64, rxx as f64)
             } else {
-                let (mut rn, mut rx, mut rxx) = (0u64, 0u128, 0u128);
+                let (mut rn, mut rx, mut rxx) = (0u64, 0f64, 0f64);
                 for (a, b) in runs(row) {
                     let (a, b) = (a as u64, b as u64);
                     rn += b - a;
-                    rx += u128::from(a + b - 1) * u128::from(b - a) / 2;
-                    rxx += squares_below_wide(b) - squares_below_wide(a);
+                    rx += (a + b - 1) as f64 * (b - a) as f64 / 2.0;
+                    rxx += squares_below_f64(b) - squares_below_f64(a);
                 }
-                (rn, rx as f64, rxx as f64)
+                (rn, rx, rxx)
             };
             sums.add_row(ly as f64, rn, rx, rxx);
         }
@@ -249,20 +248,31 @@ mod tests {
     }
 
     #[test]
-    fn the_64_bit_row_sums_equal_the_128_bit_ones_up_to_their_bound() {
-        // The closed form itself, at and near the widest row the 64-bit path takes.
+    fn the_64_bit_row_sums_are_exact_up_to_their_bound() {
+        // The closed form at and near the widest row the 64-bit path takes, against 128 bits.
+        let wide = |m: u64| {
+            let m = u128::from(m);
+            m.checked_sub(1).map_or(0, |m1| m1 * m * (2 * m - 1) / 6)
+        };
         for m in (0..2000u64).chain((WORD_ROWS as u64 - 2000)..=WORD_ROWS as u64) {
-            assert_eq!(u128::from(squares_below(m)), squares_below_wide(m), "m = {m}");
+            assert_eq!(u128::from(squares_below(m)), wide(m), "m = {m}");
         }
-        // A row as wide as the bound, and one past it (the 128-bit path), with runs at both
-        // ends: the same moments as the per-pixel sums.
+        // A row as wide as the bound, with runs at both ends: the per-pixel sums bit for bit;
+        // one past it (the floating-point guard): the same to rounding.
         for w in [WORD_ROWS, WORD_ROWS + 1] {
             let mut d = vec![0u8; w];
             d[..3].fill(1);
             d[w / 2..w / 2 + 1000].fill(1);
             d[w - 5..].fill(1);
             let m = Mask::new(-7, 3, w as u32, 1, d).unwrap();
-            assert_eq!(Moments::of_mask(&m), per_pixel(&m), "w = {w}");
+            let (got, want) = (Moments::of_mask(&m).unwrap(), per_pixel(&m).unwrap());
+            if w == WORD_ROWS {
+                assert_eq!(got, want);
+            } else {
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+                assert!(close(got.centroid.x, want.centroid.x), "{got:?} {want:?}");
+                assert!(close(got.mu20, want.mu20), "{got:?} {want:?}");
+            }
         }
     }
 
