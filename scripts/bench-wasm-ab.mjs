@@ -14,6 +14,7 @@
 import { readFileSync } from 'node:fs';
 import { resolve } from 'node:path';
 import { pathToFileURL } from 'node:url';
+import { trackPass } from './wasm-pass.mjs';
 
 /** @param {string} flag @param {string} fallback */
 const arg = (flag, fallback) => {
@@ -44,17 +45,7 @@ for (const dir of dirs) {
 
 /** One pass over the scene with a new tracker: milliseconds per frame inside `update`. */
 function pass(/** @type {typeof builds[number]} */ b) {
-  const tracker = new b.st.Tracker({ preset: 'masks' });
-  let ms = 0;
-  for (let n = 1; n <= b.sc.frames; n++) {
-    const frame = b.sc.render(n, b.buf);
-    const dets = frame.detections();
-    const t0 = performance.now();
-    tracker.update(n, b.buf, dets);
-    ms += performance.now() - t0;
-    dets.free();
-    frame.free();
-  }
+  const { ms, tracker } = trackPass(b.st, b.sc, b.buf);
   tracker.free();
   return ms / b.sc.frames;
 }

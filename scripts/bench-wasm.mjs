@@ -19,6 +19,7 @@
 import { readFileSync } from 'node:fs';
 import { resolve } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
+import { trackPass } from './wasm-pass.mjs';
 
 /** @param {string} flag @param {string} fallback */
 const arg = (flag, fallback) => {
@@ -42,23 +43,8 @@ const buf = new st.FrameBuffer(scene.width, scene.height);
 // many passes; the first pass is reported beside it.
 const MIN_PASSES = 3;
 const MIN_MS = 1000;
-/** @returns {{ ms: number, detections: number, tracker: import('../www/pkg/shapetrack.js').Tracker }} */
-function pass() {
-  const tracker = new st.Tracker({ preset: 'masks' });
-  let ms = 0;
-  let detections = 0;
-  for (let n = 1; n <= scene.frames; n++) {
-    const frame = scene.render(n, buf);
-    const dets = frame.detections();
-    detections += dets.len;
-    const t0 = performance.now();
-    tracker.update(n, buf, dets);
-    ms += performance.now() - t0;
-    dets.free();
-    frame.free();
-  }
-  return { ms, detections, tracker };
-}
+/** One timed pass with a new tracker (./wasm-pass.mjs). */
+const pass = () => trackPass(st, scene, buf);
 const cold = pass();
 cold.tracker.free();
 if (process.argv.includes('--paired')) await paired();
