@@ -1,7 +1,8 @@
 //! Heap allocations per tracked frame (issue 10: "no allocation per frame in the hot path").
-//! In wasm each allocation and free is a call into dlmalloc; they were ~13 % of the browser
-//! build's tracker time. This counts them on fixed synthetic scenes — a deterministic count,
-//! not a timing — so a change that brings back per-track or per-pair allocations fails here.
+//! In wasm each allocation and free is a call into the module's allocator (dlmalloc's were
+//! ~13 % of the browser build's tracker time; talc's, `src/wasm/mod.rs`, cost less). This
+//! counts them on fixed synthetic scenes — a deterministic count, not a timing — so a change
+//! that brings back per-track or per-pair allocations fails here.
 //!
 //! What still allocates per frame, by design: each detection's mask, shell and appearance (new
 //! data), each track's search shell, the clusters' member lists, a few small tables per
