@@ -1,4 +1,5 @@
-//! Geometry and region-estimator speed: `mask_geometry` by mask size, and `region_clusters`
+//! Geometry and region-estimator speed: `mask_geometry` by mask size, the per-shape RLE and
+//! grown search shell (`per_shape`), and `region_clusters`
 //! by shape count with the sort-and-sweep broad phase against GJK on all pairs (thesis Alg. 2).
 //!
 //! Run: `cargo bench --bench geometry`
@@ -9,6 +10,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use shapetrack::geometry::{intersects_thesis, mask_geometry, ConvexShell, GeometryConfig};
+use shapetrack::io::Rle;
 use shapetrack::region::{predicted_shell, region_clusters_with, BroadPhase};
 use shapetrack::{Mask, Point};
 
@@ -41,6 +43,26 @@ fn bench_mask_geometry(c: &mut Criterion) {
             |b, m| b.iter(|| mask_geometry(black_box(m), &cfg).unwrap()),
         );
     }
+    g.finish();
+}
+
+/// The per-shape steps of a tracked frame that `mask_geometry` does not time: a mask's COCO
+/// RLE (the offline tracker keeps every shape's mask as one) and a search shell grown by a
+/// margin (every track, every frame).
+fn bench_per_shape(c: &mut Criterion) {
+    let mut g = c.benchmark_group("per_shape");
+    for n in [64u32, 256] {
+        let m = blob_mask(n);
+        g.bench_with_input(
+            BenchmarkId::new("rle_from_mask", format!("{n}x{n}")),
+            &m,
+            |b, m| b.iter(|| Rle::from_mask(black_box(m), 1920, 1080)),
+        );
+    }
+    let shell = shapetrack::geometry::shell::pixel_hull(&blob_mask(64));
+    g.bench_function(BenchmarkId::new("shell_grown", shell.len()), |b| {
+        b.iter(|| black_box(&shell).grown(6.0))
+    });
     g.finish();
 }
 
@@ -117,6 +139,6 @@ fn bench_gjk_pair(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().measurement_time(std::time::Duration::from_secs(3));
-    targets = bench_mask_geometry, bench_region, bench_gjk_pair
+    targets = bench_mask_geometry, bench_per_shape, bench_region, bench_gjk_pair
 }
 criterion_main!(benches);
