@@ -206,27 +206,27 @@ impl ColumnChanges {
         // The changes as (column, row), row by row: the rows are scanned once, and the
         // changes (about two a column for a solid shape, against a word per 8 pixels
         // scanned) are then grouped by column with a counting sort.
-        let mut found: Vec<(u32, u32)> = Vec::with_capacity(2 * cols + 2);
+        let mut found: Vec<(usize, usize)> = Vec::with_capacity(2 * cols + 2);
         for r in 0..rows {
             let (above, here) = (if r == 0 { &zeros[..] } else { row(r - 1) }, row(r));
             let (mut a, mut b) = (above.chunks_exact(8), here.chunks_exact(8));
             for (k, (wa, wb)) in a.by_ref().zip(b.by_ref()).enumerate() {
                 let mut x = word(wa) ^ word(wb);
                 while x != 0 {
-                    found.push(((8 * k) as u32 + x.trailing_zeros() / 8, r as u32));
+                    found.push((8 * k + (x.trailing_zeros() / 8) as usize, r));
                     x &= x - 1;
                 }
             }
             let done = cols - a.remainder().len();
             for (i, (pa, pb)) in a.remainder().iter().zip(b.remainder()).enumerate() {
                 if pa != pb {
-                    found.push(((done + i) as u32, r as u32));
+                    found.push((done + i, r));
                 }
             }
         }
         let mut starts = vec![0usize; cols + 1];
         for &(c, _) in &found {
-            starts[c as usize + 1] += 1;
+            starts[c + 1] += 1;
         }
         for c in 0..cols {
             starts[c + 1] += starts[c];
@@ -234,8 +234,8 @@ impl ColumnChanges {
         let mut fill = starts.clone();
         let mut out = vec![0usize; found.len()];
         for &(c, r) in &found {
-            out[fill[c as usize]] = r as usize;
-            fill[c as usize] += 1;
+            out[fill[c]] = r;
+            fill[c] += 1;
         }
         Self { starts, rows: out }
     }
