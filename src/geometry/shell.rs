@@ -174,14 +174,10 @@ impl ConvexShell {
             // library calls, a tenth of the region estimate's time in the page (issue 10).
             let (prev, next) = (next_normal, edge_normal(i));
             next_normal = next;
-            let (dot, cross) = (
-                prev.x * next.x + prev.y * next.y,
-                prev.x * next.y - prev.y * next.x,
-            );
-            if n > 1 && cross >= 0.0 && dot >= cos_step {
-                let s = Point::new(prev.x + next.x, prev.y + next.y);
-                let k = 2.0 * margin / (s.x * s.x + s.y * s.y);
-                out.push(Point::new(v.x + k * s.x, v.y + k * s.y));
+            let dot = prev.x * next.x + prev.y * next.y;
+            if n > 1 && cross(prev, next) >= 0.0 && dot >= cos_step {
+                let s = prev + next;
+                out.push(v + s * (2.0 * margin / (s.x * s.x + s.y * s.y)));
                 continue;
             }
             let (start, turn) = if n == 1 {
@@ -719,13 +715,7 @@ mod tests {
         let dist_to_shell = |s: &ConvexShell, p: Point| -> f64 {
             let v = s.vertices();
             (0..v.len())
-                .map(|i| {
-                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
-                    let (ab, ap) = (b - a, p - a);
-                    let t =
-                        ((ap.x * ab.x + ap.y * ab.y) / (ab.x * ab.x + ab.y * ab.y)).clamp(0.0, 1.0);
-                    p.dist(Point::new(a.x + t * ab.x, a.y + t * ab.y))
-                })
+                .map(|i| point_segment_distance(p, v[i], v[(i + 1) % v.len()]))
                 .fold(f64::INFINITY, f64::min)
         };
         for (sides, stretch) in [(7, 1.0), (24, 1.0), (40, 3.5), (5, 0.2)] {
