@@ -118,6 +118,18 @@ impl ConvexShell {
     /// Appends the vertices of [`ConvexShell::translated`] to `out` (no allocation of its
     /// own: the per-frame search shells are built in one buffer, issue 10).
     fn translated_onto(&self, dx: f64, dy: f64, out: &mut Vec<Point>) {
+        let start = out.len();
+        if self.shifted_onto(dx, dy, out) {
+            // Translation keeps convexity, but rounding can make nearly collinear vertices
+            // collinear; rebuilding the hull keeps the invariant exact.
+            hull_tail(out, start);
+        }
+    }
+
+    /// Appends the vertices moved by `(dx, dy)` (a non-finite offset counting as zero) to
+    /// `out`, without rebuilding their hull; the vertices unmoved when a moved one would not
+    /// be finite. Whether they moved: only then may their hull differ from the shell.
+    fn shifted_onto(&self, dx: f64, dy: f64, out: &mut Vec<Point>) -> bool {
         let dx = if dx.is_finite() { dx } else { 0.0 };
         let dy = if dy.is_finite() { dy } else { 0.0 };
         let start = out.len();
@@ -126,12 +138,11 @@ impl ConvexShell {
             .iter()
             .all(|p| p.x.is_finite() && p.y.is_finite())
         {
-            // Translation keeps convexity, but rounding can make nearly collinear vertices
-            // collinear; rebuilding the hull keeps the invariant exact.
-            hull_tail(out, start);
+            true
         } else {
             out.truncate(start);
             out.extend_from_slice(&self.vertices);
+            false
         }
     }
 
@@ -236,15 +247,24 @@ impl ConvexShell {
     /// when an `extra` point is not finite (as `from_points` would reject it).
     pub fn moved_with(&self, dx: f64, dy: f64, sweep: bool, extra: &[Point]) -> ConvexShell {
         let mut vertices = Vec::with_capacity(2 * self.vertices.len() + extra.len());
+        if !extra.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            if sweep {
+                self.swept_onto(dx, dy, &mut vertices);
+            } else {
+                self.translated_onto(dx, dy, &mut vertices);
+            }
+            return ConvexShell { vertices };
+        }
+        // One hull of every point, where moving (or sweeping) then merging built two or
+        // three, each with its sort (the tracker builds this shell for every track and
+        // frame; issue 10). A point the moved shell's own hull would drop lies inside or on
+        // it, so it is no vertex of the merged hull either.
         if sweep {
-            self.swept_onto(dx, dy, &mut vertices);
-        } else {
-            self.translated_onto(dx, dy, &mut vertices);
+            vertices.extend_from_slice(&self.vertices);
         }
-        if extra.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
-            vertices.extend_from_slice(extra);
-            hull_tail(&mut vertices, 0);
-        }
+        self.shifted_onto(dx, dy, &mut vertices);
+        vertices.extend_from_slice(extra);
+        hull_tail(&mut vertices, 0);
         ConvexShell { vertices }
     }
 
