@@ -181,34 +181,76 @@ impl PackedRle {
 
 /// Where each column of a part of a 0/1 bitmap changes value down its rows: the rows (from
 /// 0, the part's first) whose pixel differs from the one above, the row above the first
-/// being background ([`Rle::from_mask`]).
+/// being background ([`Rle::from_mask`]). Its buffers are reused from one mask to the next
+/// ([`with_changes`]).
+#[derive(Debug, Default)]
 struct ColumnChanges {
     /// Per column, where its changes start in `rows` (one more entry than columns).
     starts: Vec<usize>,
     /// The changes' rows, column after column, top down within each.
     rows: Vec<usize>,
+    /// The changes as (column, row) in row order, before they are grouped by column.
+    found: Vec<(usize, usize)>,
+    /// Per column, the next free place in `rows` while grouping.
+    fill: Vec<usize>,
+    /// Zeros (never written): the row above the first, and any row outside the bitmap.
+    zeros: Vec<u8>,
 }
 
+thread_local! {
+    /// One [`ColumnChanges`] per thread, reused by every mask encoded: each mask allocated
+    /// its five buffers, and the page encodes every shape of every frame (issue 10: in the
+    /// browser build's profile, a seventh of the allocator's time was this function's).
+    static CHANGES: std::cell::RefCell<ColumnChanges> = std::cell::RefCell::new(ColumnChanges::default());
+}
+
+/// Runs `f` with the per-thread [`ColumnChanges`] ([`CHANGES`]), or a fresh one should it be
+/// in use (no mask is encoded inside another, but a fresh one keeps that case correct).
+fn with_changes<R>(f: impl FnOnce(&mut ColumnChanges) -> R) -> R {
+    CHANGES.with(|c| match c.try_borrow_mut() {
+        Ok(mut c) => {
+            let out = f(&mut c);
+            // A ragged mask can have a change at most pixels: its buffers are not kept for
+            // the ordinary masks after it.
+            if c.found.capacity() > KEPT_CHANGES {
+                *c = ColumnChanges::default();
+            }
+            out
+        }
+        Err(_) => f(&mut ColumnChanges::default()),
+    })
+}
+
+/// Most changes whose buffers [`with_changes`] keeps between masks (1 MiB of them): a solid
+/// shape has about two per column.
+const KEPT_CHANGES: usize = 1 << 16;
+
 impl ColumnChanges {
-    /// The changes of columns `c0..c1` over rows `row0..row0 + rows` of a `stride`-wide bitmap.
-    fn of(
+    /// Fills in the changes of columns `c0..c1` over rows `row0..row0 + rows` of a
+    /// `stride`-wide bitmap.
+    fn find(
+        &mut self,
         bits: &[u8],
         stride: usize,
         (row0, rows): (usize, usize),
         (c0, c1): (usize, usize),
-    ) -> Self {
+    ) {
         let cols = c1.saturating_sub(c0);
-        let zeros = vec![0u8; cols];
+        if self.zeros.len() < cols {
+            self.zeros.resize(cols, 0);
+        }
+        let zeros = &self.zeros[..cols];
         let row = |r: usize| -> &[u8] {
             let start = (row0 + r) * stride + c0;
-            bits.get(start..start + cols).unwrap_or(&zeros)
+            bits.get(start..start + cols).unwrap_or(zeros)
         };
         // The changes as (column, row), row by row: the rows are scanned once, and the
         // changes (about two a column for a solid shape, against a word per 8 pixels
         // scanned) are then grouped by column with a counting sort.
-        let mut found: Vec<(usize, usize)> = Vec::with_capacity(2 * cols + 2);
+        let found = &mut self.found;
+        found.clear();
         for r in 0..rows {
-            let (above, here) = (if r == 0 { &zeros[..] } else { row(r - 1) }, row(r));
+            let (above, here) = (if r == 0 { zeros } else { row(r - 1) }, row(r));
             let (mut a, mut b) = (above.chunks_exact(8), here.chunks_exact(8));
             for (k, (wa, wb)) in a.by_ref().zip(b.by_ref()).enumerate() {
                 let mut x = word(wa) ^ word(wb);
@@ -224,20 +266,22 @@ impl ColumnChanges {
                 }
             }
         }
-        let mut starts = vec![0usize; cols + 1];
-        for &(c, _) in &found {
+        let starts = &mut self.starts;
+        starts.clear();
+        starts.resize(cols + 1, 0);
+        for &(c, _) in found.iter() {
             starts[c + 1] += 1;
         }
         for c in 0..cols {
             starts[c + 1] += starts[c];
         }
-        let mut fill = starts.clone();
-        let mut out = vec![0usize; found.len()];
-        for &(c, r) in &found {
-            out[fill[c]] = r;
-            fill[c] += 1;
+        self.fill.clone_from(starts);
+        self.rows.clear();
+        self.rows.resize(found.len(), 0);
+        for &(c, r) in found.iter() {
+            self.rows[self.fill[c]] = r;
+            self.fill[c] += 1;
         }
-        Self { starts, rows: out }
     }
 
     /// The rows where column `col` changes, top down.
@@ -329,18 +373,20 @@ impl Rle {
         } else {
             (0, 0)
         };
-        let changes = ColumnChanges::of(bits, stride, (row0, rows), (c0, c1));
-        for col in 0..c1 - c0 {
-            push(false, ya as u32, &mut prev, &mut run);
-            // A column starts as background and flips at each change.
-            let (mut v, mut r) = (false, 0usize);
-            for &at in changes.of_column(col) {
-                push(v, (at - r) as u32, &mut prev, &mut run);
-                (v, r) = (!v, at);
+        with_changes(|changes| {
+            changes.find(bits, stride, (row0, rows), (c0, c1));
+            for col in 0..c1 - c0 {
+                push(false, ya as u32, &mut prev, &mut run);
+                // A column starts as background and flips at each change.
+                let (mut v, mut r) = (false, 0usize);
+                for &at in changes.of_column(col) {
+                    push(v, (at - r) as u32, &mut prev, &mut run);
+                    (v, r) = (!v, at);
+                }
+                push(v, (rows - r) as u32, &mut prev, &mut run);
+                push(false, (h - yb) as u32, &mut prev, &mut run);
             }
-            push(v, (rows - r) as u32, &mut prev, &mut run);
-            push(false, (h - yb) as u32, &mut prev, &mut run);
-        }
+        });
         push(
             false,
             height.saturating_mul((w - xb) as u32),
@@ -712,6 +758,25 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_ragged_mask_leaves_no_large_buffers_and_the_next_mask_encodes_alike() {
+        // A checkerboard changes value at every pixel of every column: more changes than the
+        // reused buffers keep.
+        let (w, h) = (600u32, 300u32);
+        let bits: Vec<u8> = (0..w * h).map(|i| ((i % w + i / w) % 2) as u8).collect();
+        let ragged = Mask::new(0, 0, w, h, bits).unwrap();
+        assert_eq!(
+            Rle::from_mask(&ragged, w, h),
+            from_mask_per_pixel(&ragged, w, h)
+        );
+        CHANGES.with(|c| assert!(c.borrow().found.capacity() <= KEPT_CHANGES));
+        let blob: Vec<u8> = (0..40 * 30)
+            .map(|i| (((i % 40) as i64 - 20).pow(2) + ((i / 40) as i64 - 15).pow(2) < 120) as u8)
+            .collect();
+        let m = Mask::new(7, 5, 40, 30, blob).unwrap();
+        assert_eq!(Rle::from_mask(&m, 64, 48), from_mask_per_pixel(&m, 64, 48));
     }
 
     #[test]
