@@ -504,22 +504,18 @@ fn plus_plus_seeds(
     let mut seeds = Vec::with_capacity(k);
     seeds.push(data[first]);
     let mut dists = vec![f64::INFINITY; n];
-    // The running totals of the pass below: `prefix[i]` is the sum of the first i + 1
-    // distances, summed in order as `WeightedIndex` sums its table (see `weighted_draw`).
-    let mut prefix = vec![0.0f64; n];
     for _ in 1..k {
         let last = seeds[seeds.len() - 1];
         // The total summed as `WeightedIndex::new` sums it: in order, from the first weight.
         let (mut total, mut valid) = (0.0f64, true);
-        for ((d, p), point) in dists.iter_mut().zip(&mut prefix).zip(data) {
+        for (d, point) in dists.iter_mut().zip(data) {
             *d = d.min(linfa_sq(&last, point));
             valid &= *d >= 0.0;
             total += *d;
-            *p = total;
         }
         // All distances 0: every point is a seed already; linfa then takes point 0.
         let next = if valid && total > 0.0 {
-            weighted_draw(&prefix, total, rng)
+            weighted_draw(&dists, total, rng)
         } else {
             0
         };
@@ -528,18 +524,25 @@ fn plus_plus_seeds(
     Ok(seeds)
 }
 
-/// `WeightedIndex::new(weights).sample(rng)` (rand 0.8) from the weights' running totals
-/// `prefix`, summed in order from 0 as `WeightedIndex` sums its table, `total` the last (and
-/// positive): the same uniform draw in `[0, total)`, then the first index whose running total
-/// exceeds it (the last index when none before it does). The weights are non-negative, so
-/// the totals never decrease and a binary search finds that index. The k-means++ seeding
-/// draws once per seed: building the table per draw was 5–8 % of the 200-shape bench, and
-/// then a second pass over the weights for the draw, where the distance pass can keep the
-/// totals (issue 10).
-fn weighted_draw(prefix: &[f64], total: f64, rng: &mut Xoshiro256Plus) -> usize {
+/// `WeightedIndex::new(weights).sample(rng)` (rand 0.8) without building its table of prefix
+/// sums for one draw: the same uniform draw in `[0, total)`, then the first index whose
+/// prefix sum, summed in the same order, exceeds it (the last index when none does). The
+/// k-means++ seeding draws once per seed from a new table, and its allocations were 5–8 % of
+/// the 200-shape bench (issue 10). `total` must be the weights' sum in order and positive.
+fn weighted_draw(weights: &[f64], total: f64, rng: &mut Xoshiro256Plus) -> usize {
     let chosen = Uniform::new(0.0, total).sample(rng);
-    let last = prefix.len().saturating_sub(1);
-    prefix[..last].partition_point(|&p| p <= chosen)
+    let mut prefix = 0.0;
+    for (i, w) in weights
+        .iter()
+        .enumerate()
+        .take(weights.len().saturating_sub(1))
+    {
+        prefix += w;
+        if prefix > chosen {
+            return i;
+        }
+    }
+    weights.len().saturating_sub(1)
 }
 
 /// The index of the centroid nearest to `p`, as linfa's `closest_centroid` picks it (the
@@ -557,52 +560,6 @@ fn closest_two(centroids: &[[f64; 3]], p: &[f64; 3]) -> (usize, f64, f64) {
         }
     }
     (best, d1, d2)
-}
-
-/// Centroids stored channel by channel, for [`closest_two`]'s answer with every distance
-/// computed first, two or four at once: the compiler vectorises a loop over one channel's
-/// values (wasm SIMD, SSE2), where one centroid's three channels did not. Each distance is
-/// [`linfa_sq`]'s, the same operations in the same order, so the answer is bit for bit
-/// [`closest_two`]'s (`tests::kmeans_is_linfas`). The memberships were the largest part of
-/// the page's tracker time (a tenth: issue 10).
-#[derive(Debug, Default)]
-struct ByChannel {
-    /// Each channel's value of every centroid.
-    channels: [Vec<f64>; 3],
-    /// The squared distances of the last point asked for.
-    dist: Vec<f64>,
-}
-
-impl ByChannel {
-    /// Holds `centroids` (the buffers are reused).
-    fn set(&mut self, centroids: &[[f64; 3]]) {
-        for (ch, values) in self.channels.iter_mut().enumerate() {
-            values.clear();
-            values.extend(centroids.iter().map(|c| c[ch]));
-        }
-        self.dist.clear();
-        self.dist.resize(centroids.len(), 0.0);
-    }
-
-    /// [`closest_two`] of the centroids held, for `p`.
-    fn closest_two(&mut self, p: &[f64; 3]) -> (usize, f64, f64) {
-        let [r, g, b] = &self.channels;
-        for (((d, &x), &y), &z) in self.dist.iter_mut().zip(r).zip(g).zip(b) {
-            // `linfa_sq`: from 0, the channels in order.
-            let (dx, dy, dz) = (x - p[0], y - p[1], z - p[2]);
-            *d = 0.0 + dx * dx + dy * dy + dz * dz;
-        }
-        let (mut best, mut d1, mut d2) = (0, f64::INFINITY, f64::INFINITY);
-        for (i, &d) in self.dist.iter().enumerate() {
-            if d < d1 || i == 0 {
-                d2 = d1;
-                (best, d1) = (i, d);
-            } else {
-                d2 = d2.min(d);
-            }
-        }
-        (best, d1, d2)
-    }
 }
 
 /// linfa's Lloyd iterations for one run (`KMeansValidParams::fit`), step for step, then its
@@ -633,16 +590,14 @@ fn lloyd(
     // Bounds on Euclidean distances (not squared: the triangle inequality moves them).
     let mut upper = vec![f64::INFINITY; data.len()];
     let mut lower = vec![0.0f64; data.len()];
-    let mut by_channel = ByChannel::default();
-    let mut assign =
+    let assign =
         |centroids: &[[f64; 3]], labels: &mut [usize], upper: &mut [f64], lower: &mut [f64]| {
-            by_channel.set(centroids);
             for (((l, p), u), lo) in labels.iter_mut().zip(data).zip(upper).zip(lower) {
                 // Colours are in [0, 255]: distances below ~450, rounding below 1e-12.
                 if *u + 1e-6 < *lo {
                     continue;
                 }
-                let (best, d1, d2) = by_channel.closest_two(p);
+                let (best, d1, d2) = closest_two(centroids, p);
                 (*l, *u, *lo) = (best, d1.sqrt(), d2.sqrt());
             }
         };
