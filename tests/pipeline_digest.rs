@@ -6,7 +6,10 @@
 //! checked, not single functions: the browser's default scene rendered, the background
 //! subtractor (the app's default detector) over it, the moving-camera detector, and the
 //! tracker with the mask preset and frames. Every detection (box, score, mask) and every
-//! tracked shape (identity, box, score, mask, state) goes into one FNV-1a digest.
+//! tracked shape (identity, box, score, mask, state) goes into one FNV-1a digest. The colour
+//! palettes (k-means over many generated samples: centroids and labels) get a digest of their
+//! own: the scene's tracks need not depend on them (a wrong distance computed in wasm changed
+//! the palettes and the moving-camera detector's digests, not the tracker's).
 //!
 //! The native test compares the digest with `tests/data/track/pipeline_digest.txt` (rewrite it
 //! with `REGENERATE=1` when a change of behaviour is meant); the same test, run in wasm by
@@ -15,6 +18,7 @@
 
 use shapetrack::detect::{BackgroundConfig, BackgroundSubtractor, Detector};
 use shapetrack::detect::{MovingCameraDetector, MovingConfig};
+use shapetrack::features::color::{view_palette, ColorConfig, ColorSample};
 use shapetrack::io::Rle;
 use shapetrack::synth::{Scene, SynthConfig};
 use shapetrack::track::{Config, Tracker};
@@ -91,6 +95,45 @@ fn digest() -> [u64; 3] {
     [bg.0, mv.0, tr.0]
 }
 
+/// The digest of the colour palettes (centroids and labels, [`view_palette`]) of generated
+/// samples: sizes from one colour to the tracker's cap, few distinct shades (ties, equal
+/// distances, empty clusters) and many, odd and even numbers of clusters, runs stopped by the
+/// iteration cap and by the tolerance.
+fn palettes() -> u64 {
+    let mut x: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let mut d = Fnv(3);
+    for case in 0..60u64 {
+        let n = [1usize, 2, 7, 50, 151, 300, 1500][case as usize % 7];
+        let levels = [2u64, 5, 256][case as usize % 3];
+        let positions: Vec<shapetrack::Point> = (0..n)
+            .map(|i| shapetrack::Point::new((i % 40) as f64, (i / 40) as f64))
+            .collect();
+        let rgb: Vec<[u8; 3]> = (0..n)
+            .map(|_| [0u8; 3].map(|_| (next() % levels * 255 / levels) as u8))
+            .collect();
+        let sample = ColorSample::new(positions, rgb, 1.0).unwrap();
+        let cfg = ColorConfig {
+            clusters: [1usize, 2, 3, 9, 10, 11, 16][case as usize % 7],
+            max_iterations: [30u64, 2, 100][case as usize % 3],
+            seed: case,
+            ..ColorConfig::default()
+        };
+        let p = view_palette(&sample, &cfg).unwrap();
+        d.u64(p.centroids.len() as u64);
+        for c in &p.centroids {
+            c.iter().for_each(|&v| d.f64(v));
+        }
+        p.labels.iter().for_each(|&l| d.u64(l as u64));
+    }
+    d.0
+}
+
 /// The committed digests, one hexadecimal line per stage.
 const COMMITTED: &str = include_str!("data/track/pipeline_digest.txt");
 
@@ -99,9 +142,9 @@ fn committed() -> Vec<String> {
 }
 
 fn lines(d: [u64; 3]) -> Vec<String> {
-    ["background", "moving", "tracker"]
+    ["background", "moving", "tracker", "palettes"]
         .iter()
-        .zip(d)
+        .zip(d.into_iter().chain([palettes()]))
         .map(|(name, v)| format!("{name} {v:016x}"))
         .collect()
 }
