@@ -108,6 +108,7 @@ fn palettes() -> u64 {
         x
     };
     let mut d = Fnv(3);
+    // The sizes, shades, cluster counts and caps vary at different rates, so the cases mix them.
     for case in 0..60u64 {
         let n = [1usize, 2, 7, 50, 151, 300, 1500][case as usize % 7];
         let levels = [2u64, 5, 256][case as usize % 3];
@@ -119,8 +120,8 @@ fn palettes() -> u64 {
             .collect();
         let sample = ColorSample::new(positions, rgb, 1.0).unwrap();
         let cfg = ColorConfig {
-            clusters: [1usize, 2, 3, 9, 10, 11, 16][case as usize % 7],
-            max_iterations: [30u64, 2, 100][case as usize % 3],
+            clusters: [1usize, 2, 3, 9, 10, 11, 16][case as usize / 7 % 7],
+            max_iterations: [30u64, 2, 100][case as usize / 3 % 3],
             seed: case,
             ..ColorConfig::default()
         };

@@ -183,7 +183,7 @@ impl PackedRle {
 /// 0, the part's first) whose pixel differs from the one above, the row above the first
 /// being background ([`Rle::from_mask`]). Its buffers are reused from one mask to the next
 /// ([`with_changes`]).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct ColumnChanges {
     /// Per column, where its changes start in `rows` (one more entry than columns).
     starts: Vec<usize>,
@@ -201,7 +201,8 @@ thread_local! {
     /// One [`ColumnChanges`] per thread, reused by every mask encoded: each mask allocated
     /// its five buffers, and the page encodes every shape of every frame (issue 10: in the
     /// browser build's profile, a seventh of the allocator's time was this function's).
-    static CHANGES: std::cell::RefCell<ColumnChanges> = std::cell::RefCell::new(ColumnChanges::default());
+    static CHANGES: std::cell::RefCell<ColumnChanges> =
+        const { std::cell::RefCell::new(ColumnChanges::EMPTY) };
 }
 
 /// Runs `f` with the per-thread [`ColumnChanges`] ([`CHANGES`]), or a fresh one should it be
@@ -213,11 +214,14 @@ fn with_changes<R>(f: impl FnOnce(&mut ColumnChanges) -> R) -> R {
             // A ragged mask can have a change at most pixels: its buffers are not kept for
             // the ordinary masks after it.
             if c.found.capacity() > KEPT_CHANGES {
-                *c = ColumnChanges::default();
+                *c = ColumnChanges::EMPTY;
             }
             out
         }
-        Err(_) => f(&mut ColumnChanges::default()),
+        Err(_) => {
+            let mut fresh = ColumnChanges::EMPTY;
+            f(&mut fresh)
+        }
     })
 }
 
@@ -226,6 +230,15 @@ fn with_changes<R>(f: impl FnOnce(&mut ColumnChanges) -> R) -> R {
 const KEPT_CHANGES: usize = 1 << 16;
 
 impl ColumnChanges {
+    /// No buffers yet (a constant, so [`CHANGES`] needs no lazy initialisation).
+    const EMPTY: Self = Self {
+        starts: Vec::new(),
+        rows: Vec::new(),
+        found: Vec::new(),
+        fill: Vec::new(),
+        zeros: Vec::new(),
+    };
+
     /// Fills in the changes of columns `c0..c1` over rows `row0..row0 + rows` of a
     /// `stride`-wide bitmap.
     fn find(
