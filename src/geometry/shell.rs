@@ -236,7 +236,9 @@ impl ConvexShell {
     fn swept_onto(&self, dx: f64, dy: f64, out: &mut Vec<Point>) {
         let start = out.len();
         out.extend_from_slice(&self.vertices);
-        self.translated_onto(dx, dy, out);
+        // One hull of both copies: a point the moved copy's own hull would drop is no vertex
+        // of the union's either.
+        self.shifted_onto(dx, dy, out);
         hull_tail(out, start);
     }
 
@@ -247,14 +249,6 @@ impl ConvexShell {
     /// when an `extra` point is not finite (as `from_points` would reject it).
     pub fn moved_with(&self, dx: f64, dy: f64, sweep: bool, extra: &[Point]) -> ConvexShell {
         let mut vertices = Vec::with_capacity(2 * self.vertices.len() + extra.len());
-        if !extra.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
-            if sweep {
-                self.swept_onto(dx, dy, &mut vertices);
-            } else {
-                self.translated_onto(dx, dy, &mut vertices);
-            }
-            return ConvexShell { vertices };
-        }
         // One hull of every point, where moving (or sweeping) then merging built two or
         // three, each with its sort (the tracker builds this shell for every track and
         // frame; issue 10). A point the moved shell's own hull would drop lies inside or on
@@ -262,9 +256,15 @@ impl ConvexShell {
         if sweep {
             vertices.extend_from_slice(&self.vertices);
         }
-        self.shifted_onto(dx, dy, &mut vertices);
-        vertices.extend_from_slice(extra);
-        hull_tail(&mut vertices, 0);
+        let moved = self.shifted_onto(dx, dy, &mut vertices);
+        let merged = extra.iter().all(|p| p.x.is_finite() && p.y.is_finite());
+        if merged {
+            vertices.extend_from_slice(extra);
+        }
+        // Unmoved, unswept and unmerged, the vertices are the shell's hull already.
+        if merged || sweep || moved {
+            hull_tail(&mut vertices, 0);
+        }
         ConvexShell { vertices }
     }
 
