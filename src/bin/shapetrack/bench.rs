@@ -6,6 +6,11 @@
 //! clock ([`Tracker::with_clock`]), which splits the time into the phases of
 //! [`shapetrack::track::PhaseTimes`]. `fps` counts the tracker only: no rendering, no
 //! detection, no file input/output.
+//!
+//! After the rows, per resolution and mode, how the time grew from the fewest shapes to the
+//! most (a fixed frame: more shapes is also a denser crowd), and, for rows with as many shapes
+//! per pixel (`--resolutions 640x480,2024x1518 --shapes 20,200`), how it grew at constant
+//! density.
 
 use serde::Serialize;
 use shapetrack::synth::{Scene, SynthConfig, SynthFrame};
@@ -425,7 +430,8 @@ fn wasm_vs_native(scene: WasmScene) -> Result<String, Box<dyn std::error::Error>
 /// Per resolution and mode, how the time per frame grows from the fewest shapes measured to
 /// the most, against how the shapes grew (linear work would grow alike): issue 10's target is
 /// 200 shapes at most 12× the 20-shape time. Ratios within one run, so a busy machine slows
-/// both ends alike.
+/// both ends alike. Then, where rows hold as many shapes per pixel, the growth at constant
+/// density ([`density_scaling`]).
 fn scaling(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     let mut keys: Vec<(u32, u32, Mode)> = Vec::new();
@@ -459,6 +465,51 @@ fn scaling(rows: &[Row]) -> Vec<String> {
             hi.shapes as f64 / lo.shapes as f64,
             hi.ms_per_frame / lo.ms_per_frame
         ));
+    }
+    out.extend(density_scaling(rows));
+    out
+}
+
+/// Shapes per pixel of two frame sizes count as equal within this relative difference
+/// (2024×1518 holds 10.0014 times the pixels of 640×480).
+const SAME_DENSITY: f64 = 0.02;
+
+/// Per mode, how the time per frame grows between two rows with as many shapes per pixel
+/// (more shapes on a proportionally larger frame): the growth that comes from the number of
+/// shapes alone. At a fixed frame size, ten times the shapes is also ten times the crowding:
+/// each shape meets ten times the neighbours, and the pairs geometry cannot decide (where
+/// appearance is compared) grow with them. This line separates the two.
+fn density_scaling(rows: &[Row]) -> Vec<String> {
+    let area = |r: &Row| f64::from(r.width) * f64::from(r.height);
+    let mut out = Vec::new();
+    for lo in rows {
+        for hi in rows {
+            if hi.mode != lo.mode || hi.shapes <= lo.shapes || lo.ms_per_frame <= 0.0 {
+                continue;
+            }
+            let (shapes, pixels) = (
+                f64::from(hi.shapes) / f64::from(lo.shapes),
+                area(hi) / area(lo),
+            );
+            if (pixels / shapes - 1.0).abs() > SAME_DENSITY {
+                continue;
+            }
+            out.push(format!(
+                "scaling {} at constant density: {} shapes at {}x{} vs {} at {}x{} (×{:.1}): time ×{:.1}",
+                match lo.mode {
+                    Mode::Box => "box",
+                    Mode::Mask => "mask",
+                },
+                hi.shapes,
+                hi.width,
+                hi.height,
+                lo.shapes,
+                lo.width,
+                lo.height,
+                shapes,
+                hi.ms_per_frame / lo.ms_per_frame
+            ));
+        }
     }
     out
 }
@@ -525,5 +576,39 @@ mod tests {
             ]
         );
         assert!(scaling(&rows[..2]).is_empty());
+    }
+
+    #[test]
+    fn density_scaling_pairs_rows_with_as_many_shapes_per_pixel() {
+        let at = |w: u32, h: u32, shapes: u32, mode: Mode, ms: f64| Row {
+            width: w,
+            height: h,
+            ..row(shapes, mode, ms)
+        };
+        let rows = [
+            at(640, 480, 20, Mode::Mask, 0.5),
+            at(640, 480, 200, Mode::Mask, 9.0),
+            at(2024, 1518, 20, Mode::Mask, 0.4),
+            at(2024, 1518, 200, Mode::Mask, 5.5),
+            at(2024, 1518, 200, Mode::Box, 1.0),
+            at(1280, 960, 80, Mode::Mask, 2.1),
+        ];
+        // 200 at 2024×1518 and 80 at 1280×960 hold 20 at 640×480's density (and so each
+        // other's); the box row has no partner of its mode, and the other pairs are 10× or
+        // 0.1× as crowded.
+        assert_eq!(
+            density_scaling(&rows),
+            [
+                "scaling mask at constant density: 200 shapes at 2024x1518 vs 20 at 640x480 (×10.0): time ×11.0",
+                "scaling mask at constant density: 80 shapes at 1280x960 vs 20 at 640x480 (×4.0): time ×4.2",
+                "scaling mask at constant density: 200 shapes at 2024x1518 vs 80 at 1280x960 (×2.5): time ×2.6"
+            ]
+        );
+        // The per-resolution lines (two of the four sizes and modes have two rows) come
+        // first, then these.
+        let lines = scaling(&rows);
+        assert_eq!(lines.len(), 5);
+        assert!(lines[1].starts_with("scaling 2024x1518 mask: 200 vs 20"));
+        assert!(lines[2].contains("constant density"));
     }
 }
