@@ -13,8 +13,10 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
+use shapetrack::geometry::{overlapping_box_pairs, ConvexShell, PreparedShell};
 use shapetrack::synth::{Scene, SynthConfig};
 use shapetrack::track::{Config, Tracker};
+use shapetrack::{BBox, Point};
 
 /// The system allocator, counting the allocations (and reallocations) made on a thread while
 /// its counter is on; other test threads are not counted.
@@ -84,17 +86,25 @@ fn per_frame(cfg: SynthConfig) -> (f64, f64) {
     (n / counted.max(1) as f64, n / dets.max(1) as f64)
 }
 
+/// The allocations `f` makes on this thread.
+fn allocations_of<T>(f: impl FnOnce() -> T) -> (T, u64) {
+    COUNT.with(|c| c.set(0));
+    COUNTING.with(|c| c.set(true));
+    let out = f();
+    COUNTING.with(|c| c.set(false));
+    (out, COUNT.with(|c| c.get()))
+}
+
 #[test]
 fn steady_frames_allocate_a_bounded_number_of_times_per_detection() {
-    // Bounds ~15 % above the counts when they were set (default scene 44.3 per detection,
-    // occlusion 42.3; before the search shells, the assignment's lone pairs, the ambiguity
-    // groups, the pixel hull, the broad phase and the clusters' copy stopped allocating per
-    // step: 77.0 and 70.4, which fail). Since the lost tracks that only re-identification
-    // looks for get their regions at its stage (a second, smaller region estimate on the
-    // frames with something to re-identify): 46.3 and 42.3.
+    // Bounds ~15 % above the counts when they were set (default scene 38.1 per detection,
+    // occlusion 35.3). Before the shells' parry form was built only for the pairs that need
+    // GJK and the broad phase kept its working buffers: 47.6 and 43.7, which fail; before the
+    // search shells, the assignment's lone pairs, the ambiguity groups, the pixel hull, the
+    // broad phase's pairs and the clusters' copy stopped allocating per step: 77.0 and 70.4.
     for (name, cfg, bound) in [
-        ("default", SynthConfig::default(), 51.0),
-        ("occlusion", SynthConfig::occlusion_scene(0), 49.0),
+        ("default", SynthConfig::default(), 44.0),
+        ("occlusion", SynthConfig::occlusion_scene(0), 41.0),
     ] {
         let (frame, det) = per_frame(cfg);
         println!("{name}: {frame:.1} allocations per frame, {det:.1} per detection");
@@ -103,4 +113,49 @@ fn steady_frames_allocate_a_bounded_number_of_times_per_detection() {
             "{name}: {det:.1} allocations per detection and frame (bound {bound})"
         );
     }
+}
+
+#[test]
+fn shells_convert_for_gjk_on_first_use_and_the_sweep_reuses_its_buffers() {
+    let square = |x: f64, y: f64, side: f64| {
+        ConvexShell::from_points(&[
+            Point::new(x, y),
+            Point::new(x + side, y),
+            Point::new(x + side, y + side),
+            Point::new(x, y + side),
+        ])
+        .expect("square")
+    };
+    // b's inner point lies deep inside a: accepted without GJK. c only grazes a's corner
+    // region (its inner point outside a), so that pair needs GJK.
+    let (a, b, c) = (
+        square(0.0, 0.0, 10.0),
+        square(2.0, 2.0, 4.0),
+        square(9.0, 9.0, 4.0),
+    );
+    let ((pa, pb, pc), n) = allocations_of(|| {
+        (
+            PreparedShell::new(&a),
+            PreparedShell::new(&b),
+            PreparedShell::new(&c),
+        )
+    });
+    assert_eq!(n, 0, "preparing a shell allocates nothing");
+    let (meet, n) = allocations_of(|| pa.intersects_fast(&pb));
+    assert!(meet);
+    assert_eq!(n, 0, "a deep overlap is accepted before any conversion");
+    let (meet, n) = allocations_of(|| pa.intersects_fast(&pc));
+    assert!(meet);
+    assert!(n > 0, "the first GJK query converts both shells");
+    let (meet, n) = allocations_of(|| pc.intersects_fast(&pa));
+    assert!(meet);
+    assert_eq!(n, 0, "and later ones reuse the conversions");
+
+    let boxes: Vec<BBox> = (0..50)
+        .map(|i| BBox::new(f64::from(i % 10) * 8.0, f64::from(i / 10) * 8.0, 10.0, 10.0))
+        .collect();
+    let first = overlapping_box_pairs(&boxes, &boxes, 0.0);
+    let (again, n) = allocations_of(|| overlapping_box_pairs(&boxes, &boxes, 0.0));
+    assert_eq!(again, first);
+    assert_eq!(n, 1, "a sweep's only allocation is the pairs it returns");
 }

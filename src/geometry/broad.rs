@@ -3,30 +3,99 @@
 //! against the `n·m` GJK calls of the thesis' double loop.
 
 use crate::frame::BBox;
+use std::cell::RefCell;
+
+/// The sweep's working buffers, kept per thread between calls: the tracker sweeps three or
+/// four sets of boxes a frame (regions, re-identification's regions, the camera's witnesses,
+/// the tracks about to meet), and each call allocated its sort order, both sides' active
+/// lists, the raw pairs and two bucket tables, and grew most of them step by step (issue 10:
+/// no allocation per frame in the hot path). Only the returned pairs are allocated now.
+struct Sweep {
+    /// One entry per box, `(left edge, side, index)`; side 0 = a, 1 = b.
+    order: Vec<(f64, u8, usize)>,
+    /// Boxes whose x-interval may still reach the sweep line, per side.
+    active: [Vec<usize>; 2],
+    /// The pairs in sweep order.
+    pairs: Vec<(usize, usize)>,
+    /// Bucket starts of [`sorted_by_first`], and each bucket's next free slot.
+    start: Vec<usize>,
+    next: Vec<usize>,
+}
+
+impl Sweep {
+    const EMPTY: Sweep = Sweep {
+        order: Vec::new(),
+        active: [Vec::new(), Vec::new()],
+        pairs: Vec::new(),
+        start: Vec::new(),
+        next: Vec::new(),
+    };
+
+    /// Whether any buffer grew past what a frame of an ordinary crowd needs: then it is
+    /// released after the call, so one huge set of boxes does not keep its memory for good.
+    fn oversized(&self) -> bool {
+        self.pairs.capacity() > KEPT_PAIRS
+            || self.order.capacity() > KEPT_BOXES
+            || self.start.capacity() > KEPT_BOXES
+    }
+}
+
+/// Most pairs (and boxes) whose buffers stay allocated between calls.
+const KEPT_PAIRS: usize = 1 << 16;
+const KEPT_BOXES: usize = 1 << 14;
+
+thread_local! {
+    static SWEEP: RefCell<Sweep> = const { RefCell::new(Sweep::EMPTY) };
+}
 
 /// The pairs `(i, j)` such that `a[i]` and `b[j]` overlap or lie within `slack` of each other
 /// (closed test on both axes), sorted by `(i, j)`. Boxes with non-finite coordinates match
 /// nothing.
 pub fn overlapping_box_pairs(a: &[BBox], b: &[BBox], slack: f64) -> Vec<(usize, usize)> {
+    SWEEP.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut sweep) => {
+            let out = sweep_into(&mut sweep, a, b, slack);
+            if sweep.oversized() {
+                *sweep = Sweep::EMPTY;
+            }
+            out
+        }
+        // Only if a caller nests sweeps (none does): fresh buffers.
+        Err(_) => {
+            let mut fresh = Sweep::EMPTY;
+            sweep_into(&mut fresh, a, b, slack)
+        }
+    })
+}
+
+/// [`overlapping_box_pairs`] with the working buffers `w` (their contents are overwritten).
+fn sweep_into(w: &mut Sweep, a: &[BBox], b: &[BBox], slack: f64) -> Vec<(usize, usize)> {
     let slack = if slack.is_finite() {
         slack.max(0.0)
     } else {
         0.0
     };
-    // One entry per box, sorted by its left edge; `side` 0 = a, 1 = b.
-    let mut order: Vec<(f64, u8, usize)> = a
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (r.x, 0u8, i))
-        .chain(b.iter().enumerate().map(|(j, r)| (r.x, 1u8, j)))
-        .filter(|&(x, _, _)| x.is_finite())
-        .collect();
-    order.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)).then(p.2.cmp(&q.2)));
+    w.order.clear();
+    w.order.extend(
+        a.iter()
+            .enumerate()
+            .map(|(i, r)| (r.x, 0u8, i))
+            .chain(b.iter().enumerate().map(|(j, r)| (r.x, 1u8, j)))
+            .filter(|&(x, _, _)| x.is_finite()),
+    );
+    w.order
+        .sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)).then(p.2.cmp(&q.2)));
     let boxes = [a, b];
-    // Boxes whose x-interval may still reach the sweep line, per side.
-    let mut active: [Vec<usize>; 2] = [Vec::new(), Vec::new()];
-    let mut pairs = Vec::new();
-    for &(x, side, idx) in &order {
+    let Sweep {
+        order,
+        active,
+        pairs,
+        start,
+        next,
+    } = w;
+    active.iter_mut().for_each(Vec::clear);
+    pairs.clear();
+    for &(x, side, idx) in order.iter() {
         let s = side as usize;
         let o = 1 - s;
         let me = &boxes[s][idx];
@@ -42,22 +111,29 @@ pub fn overlapping_box_pairs(a: &[BBox], b: &[BBox], slack: f64) -> Vec<(usize, 
         }
         active[s].push(idx);
     }
-    sorted_by_first(&pairs, a.len())
+    sorted_by_first(pairs, a.len(), start, next)
 }
 
 /// `pairs` (each `i < n`) sorted by `(i, j)`: counted into one bucket per `i`, then each
 /// bucket's few `j` sorted. The sweep emits an `i`'s pairs scattered over the whole sweep; in a
 /// crowd a general sort of its thousands of pairs was 3 % of the 200-shape bench (issue 10),
-/// this is linear in the pairs and `n`, plus the buckets' small sorts.
-fn sorted_by_first(pairs: &[(usize, usize)], n: usize) -> Vec<(usize, usize)> {
-    let mut start = vec![0usize; n + 1];
+/// this is linear in the pairs and `n`, plus the buckets' small sorts. `start` and `next` are
+/// working buffers (overwritten).
+fn sorted_by_first(
+    pairs: &[(usize, usize)],
+    n: usize,
+    start: &mut Vec<usize>,
+    next: &mut Vec<usize>,
+) -> Vec<(usize, usize)> {
+    start.clear();
+    start.resize(n + 1, 0);
     for &(i, _) in pairs {
         start[i + 1] += 1;
     }
     for i in 0..n {
         start[i + 1] += start[i];
     }
-    let mut next = start.clone();
+    next.clone_from(start);
     let mut out = vec![(0, 0); pairs.len()];
     for &(i, j) in pairs {
         out[next[i]] = (i, j);
@@ -133,6 +209,23 @@ mod tests {
         let pairs = overlapping_box_pairs(&a, &b, 1.0);
         assert!(pairs.len() > 20 * a.len(), "{} pairs", pairs.len());
         assert_eq!(pairs, brute(&a, &b, 1.0));
+    }
+
+    #[test]
+    fn a_huge_sweep_releases_its_buffers_and_the_next_sweeps_alike() {
+        // 300 × 300 boxes all over one another: 90,000 pairs, past what the buffers keep.
+        let pile = vec![BBox::new(0.0, 0.0, 10.0, 10.0); 300];
+        assert_eq!(overlapping_box_pairs(&pile, &pile, 0.0).len(), 90_000);
+        SWEEP.with(|w| {
+            let w = w.borrow();
+            assert_eq!(w.pairs.capacity(), 0);
+            assert!(!w.oversized());
+        });
+        let a = [BBox::new(0.0, 0.0, 2.0, 2.0), BBox::new(5.0, 5.0, 1.0, 1.0)];
+        let b = [BBox::new(1.0, 1.0, 5.0, 5.0), BBox::new(9.0, 0.0, 1.0, 1.0)];
+        assert_eq!(overlapping_box_pairs(&a, &b, 0.0), brute(&a, &b, 0.0));
+        // An ordinary sweep keeps its buffers for the next.
+        SWEEP.with(|w| assert!(w.borrow().pairs.capacity() > 0));
     }
 
     #[test]

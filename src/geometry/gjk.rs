@@ -6,6 +6,7 @@ use parry2d::query::details::{
     distance_support_map_support_map, intersection_test_support_map_support_map,
 };
 use parry2d::shape::{ConvexPolygon, Segment, SupportMap};
+use std::sync::OnceLock;
 
 use super::shell::{aabbs_overlap, cross, point_segment_distance, ConvexShell, TOUCH_TOLERANCE};
 use crate::frame::{BBox, Point};
@@ -30,7 +31,8 @@ pub struct PreparedShell<'a> {
     /// [`PreparedShell::intersects`]' fast accept.
     inner: Point,
     aabb: BBox,
-    shape: Local,
+    /// The f32 form for parry, built on the first GJK query ([`PreparedShell::new`]).
+    local: OnceLock<Local>,
     /// The f64 shell, for the exact fallback when the f32 conversion is unusable: borrowed,
     /// where a copy was one more allocation per shell and frame (issue 10).
     shell: &'a ConvexShell,
@@ -46,42 +48,49 @@ enum Local {
     Unrepresentable,
 }
 
+/// `shell`'s vertices relative to `origin`, in f32, as the parry shape GJK queries.
+fn local_shape(shell: &ConvexShell, origin: Point) -> Local {
+    let verts = shell.vertices();
+    let mut local: Vec<Vector> = Vec::with_capacity(verts.len());
+    let mut finite = true;
+    for p in verts {
+        let v = Vector::new((p.x - origin.x) as f32, (p.y - origin.y) as f32);
+        finite &= v.x.is_finite() && v.y.is_finite();
+        // Distinct f64 vertices can round to the same f32 point; parry needs distinct
+        // consecutive vertices to compute edge normals.
+        if local.last() != Some(&v) {
+            local.push(v);
+        }
+    }
+    if local.len() > 1 && local.first() == local.last() {
+        local.pop();
+    }
+    if !finite {
+        return Local::Unrepresentable;
+    }
+    match local.len() {
+        0 => Local::Empty,
+        1 => Local::Segment(Segment::new(local[0], local[0])),
+        2 => Local::Segment(Segment::new(local[0], local[1])),
+        // No vertex removal here: parry's `from_convex_polyline` drops vertices whose
+        // edges turn by less than ~1.5° (its f32 epsilon), which can shave a pixel off
+        // a long edge; our hull already has no collinear vertex.
+        _ => match ConvexPolygon::from_convex_polyline_unmodified(local) {
+            Some(p) => Local::Polygon(p),
+            None => Local::Unrepresentable,
+        },
+    }
+}
+
 impl<'a> PreparedShell<'a> {
-    /// Converts `shell` (its f32 vertices and parry's edge normals: two allocations; reuse the
-    /// result across queries).
+    /// Prepares `shell` for queries. Its f32 form for parry (the local vertices and parry's
+    /// edge normals: two allocations) is built on the first query that needs GJK, then
+    /// reused: most pairs of a crowd are accepted without GJK ([`PreparedShell::intersects_fast`]),
+    /// and building it for every shell of every frame was the tracker's largest source of
+    /// allocations (issue 10: 47 of 370 a frame on the default scene).
     pub fn new(shell: &'a ConvexShell) -> Self {
         let verts = shell.vertices();
         let origin = verts.first().copied().unwrap_or_default();
-        let mut local: Vec<Vector> = Vec::with_capacity(verts.len());
-        let mut finite = true;
-        for p in verts {
-            let v = Vector::new((p.x - origin.x) as f32, (p.y - origin.y) as f32);
-            finite &= v.x.is_finite() && v.y.is_finite();
-            // Distinct f64 vertices can round to the same f32 point; parry needs distinct
-            // consecutive vertices to compute edge normals.
-            if local.last() != Some(&v) {
-                local.push(v);
-            }
-        }
-        if local.len() > 1 && local.first() == local.last() {
-            local.pop();
-        }
-        let shape = if !finite {
-            Local::Unrepresentable
-        } else {
-            match local.len() {
-                0 => Local::Empty,
-                1 => Local::Segment(Segment::new(local[0], local[0])),
-                2 => Local::Segment(Segment::new(local[0], local[1])),
-                // No vertex removal here: parry's `from_convex_polyline` drops vertices whose
-                // edges turn by less than ~1.5° (its f32 epsilon), which can shave a pixel off
-                // a long edge; our hull already has no collinear vertex.
-                _ => match ConvexPolygon::from_convex_polyline_unmodified(local) {
-                    Some(p) => Local::Polygon(p),
-                    None => Local::Unrepresentable,
-                },
-            }
-        };
         let inner = if verts.is_empty() {
             origin
         } else {
@@ -92,9 +101,20 @@ impl<'a> PreparedShell<'a> {
             origin,
             inner,
             aabb: shell.aabb(),
-            shape,
+            local: OnceLock::new(),
             shell,
         }
+    }
+
+    /// The shell in parry's f32 form, relative to `origin` (built on first use).
+    fn shape(&self) -> &Local {
+        self.local
+            .get_or_init(|| local_shape(self.shell, self.origin))
+    }
+
+    /// Whether the shell has no vertex (never intersects anything).
+    fn is_empty(&self) -> bool {
+        self.shell.vertices().is_empty()
     }
 
     /// The shell's bounding box.
@@ -108,7 +128,7 @@ impl<'a> PreparedShell<'a> {
     }
 
     fn support_map(&self) -> Option<&dyn SupportMap> {
-        match &self.shape {
+        match self.shape() {
             Local::Polygon(p) => Some(p),
             Local::Segment(s) => Some(s),
             Local::Empty | Local::Unrepresentable => None,
@@ -154,7 +174,7 @@ impl<'a> PreparedShell<'a> {
     /// ([`PreparedShell::intersects_gjk`]); the same answer as GJK alone. No bounding-box
     /// early-out (the broad phase does that).
     pub fn intersects_fast(&self, other: &PreparedShell) -> bool {
-        if matches!(self.shape, Local::Empty) || matches!(other.shape, Local::Empty) {
+        if self.is_empty() || other.is_empty() {
             return false;
         }
         self.surely_contains(other.inner) || self.intersects_gjk(other)
@@ -163,7 +183,7 @@ impl<'a> PreparedShell<'a> {
     /// parry2d's GJK intersection test, without any bounding-box early-out (the broad phase
     /// does that). Touching shells may go either way within f32 rounding.
     pub fn intersects_gjk(&self, other: &PreparedShell) -> bool {
-        if matches!(self.shape, Local::Empty) || matches!(other.shape, Local::Empty) {
+        if self.is_empty() || other.is_empty() {
             return false;
         }
         match (self.support_map(), other.support_map(), self.pose_to(other)) {
@@ -182,7 +202,7 @@ impl<'a> PreparedShell<'a> {
     /// Distance between the shells by parry2d's GJK (0 when they intersect); `f64::INFINITY`
     /// when either is empty.
     pub fn distance(&self, other: &PreparedShell) -> f64 {
-        if matches!(self.shape, Local::Empty) || matches!(other.shape, Local::Empty) {
+        if self.is_empty() || other.is_empty() {
             return f64::INFINITY;
         }
         match (self.support_map(), other.support_map(), self.pose_to(other)) {
