@@ -41,6 +41,7 @@ pub mod io;
 pub mod motion;
 pub mod region;
 mod runs;
+mod scratch;
 pub mod settings;
 pub mod synth;
 pub mod track;

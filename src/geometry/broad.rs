@@ -3,6 +3,7 @@
 //! against the `n·m` GJK calls of the thesis' double loop.
 
 use crate::frame::BBox;
+use crate::scratch::{with_scratch, Scratch};
 use std::cell::RefCell;
 
 /// The sweep's working buffers, kept per thread between calls: the tracker sweeps three or
@@ -22,7 +23,7 @@ struct Sweep {
     next: Vec<usize>,
 }
 
-impl Sweep {
+impl Scratch for Sweep {
     const EMPTY: Sweep = Sweep {
         order: Vec::new(),
         active: [Vec::new(), Vec::new()],
@@ -52,20 +53,7 @@ thread_local! {
 /// (closed test on both axes), sorted by `(i, j)`. Boxes with non-finite coordinates match
 /// nothing.
 pub fn overlapping_box_pairs(a: &[BBox], b: &[BBox], slack: f64) -> Vec<(usize, usize)> {
-    SWEEP.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut sweep) => {
-            let out = sweep_into(&mut sweep, a, b, slack);
-            if sweep.oversized() {
-                *sweep = Sweep::EMPTY;
-            }
-            out
-        }
-        // Only if a caller nests sweeps (none does): fresh buffers.
-        Err(_) => {
-            let mut fresh = Sweep::EMPTY;
-            sweep_into(&mut fresh, a, b, slack)
-        }
-    })
+    with_scratch(&SWEEP, |sweep| sweep_into(sweep, a, b, slack))
 }
 
 /// [`overlapping_box_pairs`] with the working buffers `w` (their contents are overwritten).

@@ -13,6 +13,7 @@ use super::gjk::PreparedShell;
 use super::GeometryError;
 use crate::frame::{BBox, Mask, Point};
 use crate::runs::{first_nonzero, last_nonzero};
+use crate::scratch::with_scratch;
 
 /// Distance under which two shells count as touching, in pixels.
 ///
@@ -444,20 +445,11 @@ fn hull_tail(pts: &mut Vec<Point>, start: usize) {
     if kept <= 2 {
         return;
     }
-    with_chain(|hull| {
+    with_scratch(&CHAIN, |hull| {
         monotone_chain_into(&pts[start..], hull);
         pts.truncate(start);
         pts.extend_from_slice(hull);
     });
-}
-
-/// Runs `f` with the per-thread chain buffer ([`CHAIN`]), or with a fresh one should it be in
-/// use (no hull is built inside another, but a fresh buffer keeps that case correct).
-fn with_chain<R>(f: impl FnOnce(&mut Vec<Point>) -> R) -> R {
-    CHAIN.with(|chain| match chain.try_borrow_mut() {
-        Ok(mut buf) => f(&mut buf),
-        Err(_) => f(&mut Vec::new()),
-    })
 }
 
 /// The convex hull of `pts` (at least three), sorted by `(x, y)` without repeats, into `hull`,
@@ -539,7 +531,7 @@ pub fn pixel_hull(mask: &Mask) -> ConvexShell {
     let mut hull = if transposed.len() <= 2 {
         back(&transposed)
     } else {
-        with_chain(|chain| {
+        with_scratch(&CHAIN, |chain| {
             monotone_chain_into(&transposed, chain);
             back(chain)
         })

@@ -6,6 +6,7 @@
 //! (`i > 2`, a pycocotools quirk we keep for byte equality).
 
 use crate::frame::{FrameError, Mask};
+use crate::scratch::{with_scratch, Scratch};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -182,7 +183,7 @@ impl PackedRle {
 /// Where each column of a part of a 0/1 bitmap changes value down its rows: the rows (from
 /// 0, the part's first) whose pixel differs from the one above, the row above the first
 /// being background ([`Rle::from_mask`]). Its buffers are reused from one mask to the next
-/// ([`with_changes`]).
+/// ([`with_scratch`]).
 #[derive(Debug)]
 struct ColumnChanges {
     /// Per column, where its changes start in `rows` (one more entry than columns).
@@ -205,32 +206,11 @@ thread_local! {
         const { std::cell::RefCell::new(ColumnChanges::EMPTY) };
 }
 
-/// Runs `f` with the per-thread [`ColumnChanges`] ([`CHANGES`]), or a fresh one should it be
-/// in use (no mask is encoded inside another, but a fresh one keeps that case correct).
-fn with_changes<R>(f: impl FnOnce(&mut ColumnChanges) -> R) -> R {
-    CHANGES.with(|c| match c.try_borrow_mut() {
-        Ok(mut c) => {
-            let out = f(&mut c);
-            // A ragged mask can have a change at most pixels: its buffers are not kept for
-            // the ordinary masks after it.
-            if c.found.capacity() > KEPT_CHANGES {
-                *c = ColumnChanges::EMPTY;
-            }
-            out
-        }
-        Err(_) => {
-            let mut fresh = ColumnChanges::EMPTY;
-            f(&mut fresh)
-        }
-    })
-}
-
-/// Most changes whose buffers [`with_changes`] keeps between masks (1 MiB of them): a solid
+/// Most changes whose buffers [`CHANGES`] keeps between masks (1 MiB of them): a solid
 /// shape has about two per column.
 const KEPT_CHANGES: usize = 1 << 16;
 
-impl ColumnChanges {
-    /// No buffers yet (a constant, so [`CHANGES`] needs no lazy initialisation).
+impl Scratch for ColumnChanges {
     const EMPTY: Self = Self {
         starts: Vec::new(),
         rows: Vec::new(),
@@ -239,6 +219,14 @@ impl ColumnChanges {
         zeros: Vec::new(),
     };
 
+    /// A ragged mask can have a change at most pixels: its buffers are not kept for the
+    /// ordinary masks after it.
+    fn oversized(&self) -> bool {
+        self.found.capacity() > KEPT_CHANGES
+    }
+}
+
+impl ColumnChanges {
     /// Fills in the changes of columns `c0..c1` over rows `row0..row0 + rows` of a
     /// `stride`-wide bitmap.
     fn find(
@@ -386,7 +374,7 @@ impl Rle {
         } else {
             (0, 0)
         };
-        with_changes(|changes| {
+        with_scratch(&CHANGES, |changes| {
             changes.find(bits, stride, (row0, rows), (c0, c1));
             for col in 0..c1 - c0 {
                 push(false, ya as u32, &mut prev, &mut run);
