@@ -4,16 +4,18 @@
 // worker took control).
 //
 // Files under a `lazy` folder (the SSD detector's model and runtime, ~19 MB, see
-// scripts/models.mjs) are left out of the install: most visitors never pick that detector.
-// The service worker caches each of them the first time it is fetched, in a cache named after
-// their content, so the detector works offline once it has been used online, and an app
-// update that leaves them unchanged keeps them.
+// scripts/models.mjs; the learned segmenter's, ~19 MB, scripts/segmenter-model.mjs) are left
+// out of the install: most visitors never use them. The service worker caches each of them
+// the first time it is fetched, in a cache per folder named after that folder's content, so a
+// feature works offline once it has been used online, and an app update that leaves a
+// folder's files unchanged keeps its cache.
 import { createHash } from 'node:crypto';
 import { readFileSync } from 'node:fs';
 
 /**
  * The build's files split into what the install precaches and what is cached on first use,
- * with a version for each set (a hash of names and contents).
+ * with a version for each set (a hash of names and contents): `lazyVersion` of all lazy files,
+ * `lazyVersions` of each lazy folder's.
  * @param {Record<string, { type: 'chunk', code: string } | { type: 'asset', source: string | Uint8Array }>} bundle
  * @param {string[]} lazy folder prefixes (relative to the build root) cached on first use
  */
@@ -33,13 +35,16 @@ export function splitBundle(bundle, lazy) {
   };
   const precache = files.filter((f) => !isLazy(f));
   const onDemand = files.filter(isLazy);
-  return { precache, onDemand, version: version(precache), lazyVersion: version(onDemand) };
+  /** @type {Record<string, string>} */
+  const lazyVersions = Object.fromEntries(lazy.map((p) => [p, version(onDemand.filter((f) => f.startsWith(p)))]));
+  return { precache, onDemand, version: version(precache), lazyVersion: version(onDemand), lazyVersions };
 }
 
 /**
  * @param {{ source: string, lazy?: string[] }} opts `source`: path of the service worker
  *   source, with the placeholders `__PRECACHE__` and `__LAZY__` (JSON array strings),
- *   `__VERSION__` and `__LAZY_VERSION__`; `lazy`: folders cached on first use
+ *   `__LAZY_VERSIONS__` (a JSON object string: folder → version) and `__VERSION__`; `lazy`:
+ *   folders cached on first use
  * @returns {import('vite').Plugin}
  */
 export function serviceWorker({ source, lazy = [] }) {
@@ -54,7 +59,7 @@ export function serviceWorker({ source, lazy = [] }) {
         .replace("'__PRECACHE__'", JSON.stringify(JSON.stringify(['./', ...split.precache])))
         .replace("'__LAZY__'", JSON.stringify(JSON.stringify(lazy)))
         .replace("'__VERSION__'", JSON.stringify(split.version))
-        .replace("'__LAZY_VERSION__'", JSON.stringify(split.lazyVersion));
+        .replace("'__LAZY_VERSIONS__'", JSON.stringify(JSON.stringify(split.lazyVersions)));
       this.emitFile({ type: 'asset', fileName: 'sw.js', source: code });
     },
   };

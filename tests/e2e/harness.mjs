@@ -9,6 +9,7 @@ import { tmpdir } from 'node:os';
 import { extname, join, normalize, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
+import { ISOLATION_HEADERS } from '../../scripts/vite-isolation.mjs';
 
 export const ROOT = resolve(fileURLToPath(new URL('../..', import.meta.url)));
 export const DIST = join(ROOT, 'www', 'dist');
@@ -31,7 +32,8 @@ const MIME = {
 };
 
 /**
- * Serves `dir` on 127.0.0.1:`port` and logs every request path.
+ * Serves `dir` on 127.0.0.1:`port` and logs every request path. Every answer carries the
+ * cross-origin isolation headers, as the app is served everywhere (scripts/vite-isolation.mjs).
  * @param {string} dir
  * @param {number} port
  */
@@ -48,17 +50,17 @@ export async function serve(dir, port) {
     last = Date.now();
     let path = normalize(join(dir, decodeURIComponent(url.pathname)));
     if (!path.startsWith(dir + sep) && path !== dir) {
-      res.writeHead(403).end();
+      res.writeHead(403, ISOLATION_HEADERS).end();
       return;
     }
     if (existsSync(path) && statSync(path).isDirectory()) path = join(path, 'index.html');
     if (!existsSync(path)) {
-      res.writeHead(404).end('not found');
+      res.writeHead(404, ISOLATION_HEADERS).end('not found');
       return;
     }
     const type = MIME[/** @type {keyof typeof MIME} */ (extname(path))] ?? 'application/octet-stream';
     // No HTTP caching: the offline test must be served by the service worker, not the cache.
-    res.writeHead(200, { 'content-type': type, 'cache-control': 'no-store' });
+    res.writeHead(200, { 'content-type': type, 'cache-control': 'no-store', ...ISOLATION_HEADERS });
     res.end(readFileSync(path));
   });
   await new Promise((ok, fail) => {

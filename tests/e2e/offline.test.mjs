@@ -1,7 +1,8 @@
 // Offline: after one visit the service worker serves the whole app (shell, JS, worker, wasm)
 // with the network off, and the app still works: it imports, draws masks and exports through
 // the wasm core. MOTS masks also round-trip byte for byte. The install precaches the app, not the
-// SSD detector's 19 MB (cached on first use instead, see ssd.test.mjs).
+// SSD detector's 19 MB nor the learned segmenter's 19 MB (cached on first use instead, see
+// ssd.test.mjs and segmenter.test.mjs). The page is cross-origin isolated online and offline.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -89,6 +90,8 @@ test('after one visit the app loads, imports, draws and exports with the network
     await page.reload();
     await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
     assert.deepEqual(app.server.appRequests(served), [], 'nothing reached the server while offline');
+    // The shell came from the cache with the headers it was fetched with.
+    assert.equal(await page.evaluate(() => crossOriginIsolated), true, 'cross-origin isolated offline');
 
     const mots = motsFile();
     await page.setInputFiles('#file-import', { name: 'discs.txt', mimeType: 'text/plain', buffer: Buffer.from(mots) });
@@ -123,7 +126,7 @@ test('after one visit the app loads, imports, draws and exports with the network
   await page.close();
 });
 
-test('the install precaches the app shell, the bench page and the wasm, not the SSD detector\'s files', () => {
+test('the install precaches the app shell, the bench page and the wasm, not the SSD detector\'s or the segmenter\'s files', () => {
   const code = readFileSync(join(DIST, 'sw.js'), 'utf8');
   const list = (/** @type {string} */ name) => {
     const m = new RegExp(`const ${name} = .*?JSON\\.parse\\((".*?")\\)`).exec(code);
@@ -131,14 +134,17 @@ test('the install precaches the app shell, the bench page and the wasm, not the 
     return /** @type {string[]} */ (JSON.parse(JSON.parse(m[1])));
   };
   const precache = list('PRECACHE');
-  assert.deepEqual(list('LAZY'), ['ssd/']);
+  assert.deepEqual(list('LAZY'), ['ssd/', 'seg/']);
   for (const want of [/^\.\/$/, /^assets\/index-.+\.js$/, /^assets\/worker-.+\.js$/, /^assets\/shapetrack_bg-.+\.wasm$/, /^bench\.html$/, /^assets\/bench-.+\.js$/]) {
     assert.ok(precache.some((f) => want.test(f)), `${want} precached: ${precache}`);
   }
   assert.ok(!precache.some((f) => f.startsWith('ssd/') || f.endsWith('.tflite') || f.includes('tflite_web_api')), `${precache}`);
+  assert.ok(!precache.some((f) => f.startsWith('seg/') || f.endsWith('.onnx') || f.includes('ort-wasm')), `${precache}`);
   // The build does have the SSD files, under ssd/: left out, not missing.
   const ssd = readdirSync(join(DIST, 'ssd'), { recursive: true }).map(String);
   assert.ok(ssd.some((f) => f.endsWith('.tflite')) && ssd.some((f) => f.endsWith('.wasm')), `${ssd}`);
+  const seg = readdirSync(join(DIST, 'seg')).map(String);
+  assert.ok(seg.some((f) => f.endsWith('.onnx')) && seg.some((f) => f.endsWith('.wasm')) && seg.some((f) => f.endsWith('.mjs')), `${seg}`);
   const bytes = precache.filter((f) => f !== './').reduce((n, f) => n + statSync(join(DIST, f)).size, 0);
   assert.ok(bytes < 3_000_000, `install downloads ${bytes} bytes`);
 });

@@ -115,6 +115,13 @@ function exposeForTests(app) {
     groundTruth: () => app.gt?.all() ?? [],
     /** What the tracker in the worker reported, for checking the page lost nothing. */
     trackerRecords: () => app.worker.request({ type: 'tracks' }).then((r) => /** @type {any} */ (r).records),
+    /**
+     * A client of the app's segmenter worker (issue 63), spawned from this page, for the e2e
+     * test and scripts/bench-segmenter.mjs (the app itself will run it from the tracker worker).
+     * Loaded on call: its code and files are not part of the page's start.
+     * @param {{ threads?: number, backend?: 'auto' | 'wasm' | 'webgpu' }} [opts]
+     */
+    segmenter: async (opts) => new (await import('./worker/segmenter/client.js')).SegmenterClient(opts),
   };
   /** @type {any} */ (window).__shapetrack = api;
   window.dispatchEvent(new Event('shapetrack-ready'));

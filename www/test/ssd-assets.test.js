@@ -79,3 +79,32 @@ test('the installed @mediapipe/objectron: labels at 0…184, the model at 184…
   for (const f of RUNTIME_FILES) assert.ok(existsSync(join(TFLITE, 'wasm', f)), f);
   t.diagnostic(`model ${s.model.length} bytes, sha256 ${s.sha256}`);
 });
+
+test("tfjs-tflite's feature check sees no SharedArrayBuffer (the app is cross-origin isolated, its threaded runtime not shipped), and only during the call", async () => {
+  const { singleThreadedFeatures } = await import('../src/worker/detectors/ssd.js');
+  /** @type {unknown[]} */
+  const seen = [];
+  const features = await singleThreadedFeatures(async () => {
+    // What tfjs-tflite's check does first, synchronously: try to make one.
+    let multiThreading = true;
+    try {
+      new SharedArrayBuffer(1);
+    } catch {
+      multiThreading = false;
+    }
+    seen.push(typeof globalThis.SharedArrayBuffer);
+    await null;
+    seen.push(typeof globalThis.SharedArrayBuffer);
+    return { simd: true, multiThreading };
+  });
+  assert.deepEqual(features, { simd: true, multiThreading: false });
+  assert.deepEqual(seen, ['undefined', 'function'], 'hidden for the synchronous step, back after it');
+  assert.equal(typeof SharedArrayBuffer, 'function');
+  // A throwing check puts it back too.
+  assert.throws(() =>
+    singleThreadedFeatures(() => {
+      throw new Error('boom');
+    }),
+  );
+  assert.equal(typeof SharedArrayBuffer, 'function');
+});

@@ -114,16 +114,37 @@ async function withImportScripts(url, code, fn) {
   }
 }
 
+/**
+ * tfjs-tflite's wasm features, as it will use them, with multithreading reported absent. The
+ * app is cross-origin isolated (for the learned segmenter's threads, scripts/vite-isolation.mjs),
+ * so SharedArrayBuffer exists, and tfjs-tflite would then load its threaded runtime, which the
+ * app does not ship: its thread workers are classic scripts that load the runtime themselves,
+ * beside the stand-in that runs it in this module worker (`withImportScripts`), and on a
+ * 2-core machine it would run one thread anyway (`numThreads: -1` is half the cores). Its
+ * feature check tries a SharedArrayBuffer once and keeps the answer for every later load:
+ * SharedArrayBuffer is out of sight for that synchronous first step only, then back.
+ * @param {() => Promise<{ simd: boolean, multiThreading: boolean }>} getWasmFeatures
+ */
+export function singleThreadedFeatures(getWasmFeatures) {
+  const g = /** @type {Record<string, unknown>} */ (/** @type {unknown} */ (globalThis));
+  const own = Object.prototype.hasOwnProperty.call(g, 'SharedArrayBuffer');
+  const sab = g.SharedArrayBuffer;
+  if (own) delete g.SharedArrayBuffer;
+  try {
+    return getWasmFeatures();
+  } finally {
+    if (own) g.SharedArrayBuffer = sab;
+  }
+}
+
 /** @returns {Promise<LoadedModel>} */
 async function loadModel() {
   const rt = await import('virtual:shapetrack-ssd');
   const base = new URL(rt.runtimeUrl, self.location.href).href;
   rt.setWasmPath(base);
-  const { simd, multiThreading } = await rt.getWasmFeatures();
+  const { simd, multiThreading } = await singleThreadedFeatures(rt.getWasmFeatures);
   if (multiThreading) {
-    // Only a cross-origin isolated page has SharedArrayBuffer; the app is not served that way
-    // and does not ship the threaded runtime.
-    throw new Error('SSD detector: this page is cross-origin isolated; the app ships only the non-threaded TFLite runtime');
+    throw new Error('SSD detector: tfjs-tflite chose its threaded runtime, which the app does not ship');
   }
   const script = new URL(simd ? 'tflite_web_api_cc_simd.js' : 'tflite_web_api_cc.js', base).href;
   const [code, weights, labelsText] = await Promise.all([
