@@ -683,8 +683,8 @@ export class App {
     if (id === null) throw new FollowError('select a shape to follow (click it), or draw a box or polygon around the object (X, P)');
     const r = this.model.table.get(this.cur, id);
     if (!r) throw new FollowError(`track ${id} has no shape in frame ${this.cur}: go to a frame where it is seen, or draw one (X, P)`);
-    // A box-only record (a box detector, an import) starts from its filled box.
-    const key = r.mask ? r : { ...r, mask: this.core.encodeMask(this.stage.width, this.stage.height, rasterize({ kind: 'box', box: r.bbox }, this.stage.width, this.stage.height)) };
+    // A box-only record (a box detector, an import) starts from the outline its box holds.
+    const key = r.mask ? r : { ...r, mask: this.core.encodeMask(this.stage.width, this.stage.height, await this.boxMask(r.bbox)) };
     const legs = followLegs({ frame: this.cur, frames: this.session.frames, ...this.followSettings() });
     await this.followFrom(id, key, clipLegs(this.model.table, id, legs));
   }
@@ -695,7 +695,56 @@ export class App {
    */
   async shapeDrawn(shape) {
     const { width, height } = this.stage;
-    await this.shapeGiven(rasterize(shape, width, height));
+    // A box says where the object is, not its shape: it becomes the outline it holds. A
+    // polygon is the labeller's outline already.
+    await this.shapeGiven(shape.kind === 'box' ? await this.boxMask(shape.box) : rasterize(shape, width, height));
+  }
+
+  /**
+   * How the last box became a mask (`how`, `ms` in the worker, `note`: why not learned), for
+   * the status line and the tests.
+   * @type {{ how: 'learned' | 'refined', ms: number, note: string | null } | null}
+   */
+  lastBoxMask = null;
+
+  /**
+   * The outline of what `box` holds on this frame, as a full-frame bitmap: by the learned
+   * segmenter in the tracker worker when the Follow card's "learned outline" is on and the
+   * net loads, else by the weights-free refinement (worker/learned.js). The progress bar shows
+   * the net's files arriving, then the inference; tracking stops first (the worker does one
+   * thing at a time, and this frame must stay in its buffer).
+   * @param {{ x: number, y: number, w: number, h: number }} box
+   * @returns {Promise<Uint8Array>}
+   */
+  async boxMask(box) {
+    const src = this.source;
+    if (!src) throw new FollowError('open the demo, a video or an image sequence first');
+    checkShape({ bbox: box });
+    if (this.following) throw new FollowError('a follow is under way: wait for it or cancel it (Esc)');
+    await this.stop();
+    const learned = byId('fol-learned', HTMLInputElement).checked;
+    const progress = byId('fol-progress', HTMLProgressElement);
+    progress.hidden = false;
+    progress.removeAttribute('value'); // indeterminate until the first report
+    this.status(learned ? 'outlining the box…' : 'outlining the box (weights-free)…');
+    try {
+      const r = await this.worker.boxMask(this.cur, box, learned, await this.grab(src, this.cur), (p) => {
+        if (p.phase === 'load') {
+          progress.value = p.total ? p.loaded / p.total : 0;
+          this.status(`loading the learned segmenter: ${(p.loaded / 1e6).toFixed(1)} of ${(p.total / 1e6).toFixed(1)} MB`);
+        } else {
+          progress.removeAttribute('value');
+          this.status('outlining the box (learned segmenter)…');
+        }
+      });
+      this.lastBoxMask = { how: r.how, ms: r.ms, note: r.note };
+      const how = r.how === 'learned' ? 'learned outline' : `weights-free outline${learned && r.note ? ` (${r.note})` : ''}`;
+      this.status(`${how} in ${(r.ms / 1000).toFixed(1)} s`);
+      return r.bitmap;
+    } finally {
+      progress.hidden = true;
+      progress.value = 0;
+    }
   }
 
   /**

@@ -109,6 +109,7 @@ function exposeForTests(app) {
       status: byId('status').textContent,
       detector: app.detector,
       detectorChoice: app.detectorChoice?.name ?? null,
+      boxMask: app.lastBoxMask,
     }),
     /** Every record as the table holds it (frame, id, bbox, ...). */
     records: () => app.model.table.all(),

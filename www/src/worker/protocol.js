@@ -3,7 +3,9 @@
 // order the requests were sent. Video frames travel as transferred ImageBitmaps (no copies).
 // The worker paints the page's frame canvas (handed over once with `attach`), so the page
 // only draws overlays: a tracked frame is painted just before its result is posted. Only
-// `finish` sends messages before its answer: `{ id, progress }` reports of the offline pass.
+// `finish` and `boxMask` send messages before their answer: `{ id, progress }` reports of the
+// offline pass, and of the learned net's files arriving then its inference (`boxMask`: a drawn
+// or imported box → the outline of what it holds, learned or refined, see ./learned.js).
 //
 // Following a shape (`followStart`, then one `followStep` per frame, `followEnd`) is driven by
 // the page a frame at a time rather than as one long request with progress messages: video
@@ -73,6 +75,7 @@
  *   | { type: 'followStart', frame: number, to: number, mask: import('../model/tracks.js').Rle, bitmap?: ImageBitmap }
  *   | { type: 'followStep', frame: number, bitmap?: ImageBitmap }
  *   | { type: 'followEnd' }
+ *   | { type: 'boxMask', frame: number, box: { x: number, y: number, w: number, h: number }, learned: boolean, bitmap?: ImageBitmap }
  *   | { type: 'tracks' }
  *   | { type: 'close' }} Request
  */
@@ -214,6 +217,20 @@ export class WorkerClient {
   /** Ends the follow under way. @returns {Promise<{}>} */
   followEnd() {
     return this.request({ type: 'followEnd' });
+  }
+
+  /**
+   * The outline of what `box` holds in frame `frame` (./learned.js): learned when `learned`
+   * and the net is available, else refined without weights.
+   * @param {number} frame
+   * @param {{ x: number, y: number, w: number, h: number }} box
+   * @param {boolean} learned
+   * @param {ImageBitmap} [bitmap] the frame's pixels (transferred), for video and image sources
+   * @param {(p: import('./learned.js').LearnedProgress) => void} [onProgress]
+   * @returns {Promise<import('./learned.js').BoxMask>}
+   */
+  boxMask(frame, box, learned, bitmap, onProgress) {
+    return this.request({ type: 'boxMask', frame, box, learned, bitmap }, bitmap ? [bitmap] : [], onProgress);
   }
 
   terminate() {

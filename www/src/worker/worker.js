@@ -14,6 +14,7 @@
 import { loadCore } from '../lib/core.js';
 import { createDetector } from './detectors.js';
 import { SceneFeed } from './feed.js';
+import { boxMask } from './learned.js';
 
 /** @typedef {import('../lib/core.js').Core} Core */
 /** @typedef {import('./protocol.js').Request & { id: number }} Req */
@@ -107,6 +108,17 @@ async function dispatch(req) {
     case 'followEnd':
       followEnd();
       return { result: {}, transfer: [] };
+    case 'boxMask': {
+      const s = need();
+      await framePixels(s, req.frame, req.bitmap ?? null);
+      // Nothing else runs in this worker meanwhile (one request at a time): the frame buffer
+      // keeps this frame while the net looks at it.
+      const r = await boxMask(s.core, s.buffer, req.box, {
+        learned: req.learned,
+        onProgress: (progress) => ctx.postMessage({ id: req.id, progress }),
+      });
+      return { result: r, transfer: [r.bitmap.buffer] };
+    }
     case 'close':
       close();
       return { result: {}, transfer: [] };
@@ -501,6 +513,23 @@ async function followFrame(s, n, bitmap) {
       s.cache.set(k, pixels(s).slice());
     }
   }
+  await syntheticFrame(s, n, false);
+}
+
+/**
+ * Puts frame `n` into the frame buffer without tracking it: the page's bitmap, or the
+ * synthetic scene's frame.
+ * @param {Session} s
+ * @param {number} n
+ * @param {ImageBitmap | null} bitmap
+ */
+async function framePixels(s, n, bitmap) {
+  if (bitmap) {
+    load(s, bitmap);
+    bitmap.close();
+    return;
+  }
+  if (!s.scene) throw new Error(`frame ${n}: no pixels sent`);
   await syntheticFrame(s, n, false);
 }
 
