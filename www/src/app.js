@@ -663,6 +663,8 @@ export class App {
     byId('fol-box').setAttribute('aria-pressed', String(next === 'box'));
     byId('fol-poly').setAttribute('aria-pressed', String(next === 'polygon'));
     byId('overlay').classList.toggle('drawing', next !== null);
+    // The learned segmenter starts loading while the box is drawn (worker/learned.js).
+    if (next === 'box' && this.source && byId('fol-learned', HTMLInputElement).checked) void this.worker.learnedWarm().catch(() => {});
     if (next) {
       const what = next === 'box' ? 'drag a box' : 'click the corners of a polygon (Enter or double-click closes it)';
       const on = this.selection.a !== null ? `: it becomes track ${this.selection.a}'s shape here (Esc first for a new track)` : ' around the object to follow';

@@ -12,7 +12,7 @@
 //   where a frame gets ~50 ms). See the class.
 
 import { SegmenterClient } from './segmenter/client.js';
-import { SegmenterError } from './segmenter/contract.js';
+import { INPUT_LENGTH, SegmenterError } from './segmenter/contract.js';
 
 /**
  * @typedef {import('../lib/core.js').Core} Core
@@ -47,6 +47,24 @@ function segmenter() {
 function forgetSegmenter() {
   client?.dispose();
   client = null;
+}
+
+/**
+ * Starts loading the net, and runs it once on zeros, without waiting for either: the page
+ * asks when the labeller picks the box tool, so the load (2 s or more) and the first
+ * inference's extra cost (the runtime allocates and tiers up: ~1.5 s more than later ones)
+ * pass while the box is drawn. A failure is forgotten here (the next use tries again and
+ * reports it).
+ */
+export function warmLearned() {
+  const seg = segmenter();
+  if (seg.info) return;
+  seg
+    .start()
+    .then(() => seg.run(new Float32Array(INPUT_LENGTH), { transfer: true }))
+    .catch(() => {
+      if (client === seg && !seg.info) forgetSegmenter();
+    });
 }
 
 /**

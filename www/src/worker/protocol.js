@@ -75,6 +75,7 @@
  *   | { type: 'followStart', frame: number, to: number, mask: import('../model/tracks.js').Rle, bitmap?: ImageBitmap }
  *   | { type: 'followStep', frame: number, bitmap?: ImageBitmap }
  *   | { type: 'followEnd' }
+ *   | { type: 'learnedWarm' }
  *   | { type: 'boxMask', frame: number, box: { x: number, y: number, w: number, h: number }, learned: boolean, bitmap?: ImageBitmap }
  *   | { type: 'tracks' }
  *   | { type: 'close' }} Request
@@ -217,6 +218,14 @@ export class WorkerClient {
   /** Ends the follow under way. @returns {Promise<{}>} */
   followEnd() {
     return this.request({ type: 'followEnd' });
+  }
+
+  /**
+   * Starts loading the learned segmenter in the background (answered at once; see
+   * learned.js's `warmLearned`). @returns {Promise<{}>}
+   */
+  learnedWarm() {
+    return this.request({ type: 'learnedWarm' });
   }
 
   /**

@@ -14,7 +14,7 @@
 import { loadCore } from '../lib/core.js';
 import { createDetector } from './detectors.js';
 import { SceneFeed } from './feed.js';
-import { boxMask } from './learned.js';
+import { boxMask, warmLearned } from './learned.js';
 
 /** @typedef {import('../lib/core.js').Core} Core */
 /** @typedef {import('./protocol.js').Request & { id: number }} Req */
@@ -107,6 +107,9 @@ async function dispatch(req) {
       return { result: await followStep(req.frame, req.bitmap ?? null), transfer: [] };
     case 'followEnd':
       followEnd();
+      return { result: {}, transfer: [] };
+    case 'learnedWarm':
+      warmLearned();
       return { result: {}, transfer: [] };
     case 'boxMask': {
       const s = need();
