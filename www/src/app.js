@@ -107,6 +107,17 @@ export class App {
     this.lastDetections = 0;
     /** Worker-side milliseconds per frame, for the status line. */
     this.lastTimings = { detect: 0, track: 0, total: 0 };
+    /**
+     * The detector's learned stage (worker/learned.js): `keyframes` or `off` (the default until
+     * its cost and gain are measured across the clips; `?learned=keyframes`, or the checkbox).
+     * @type {'off' | 'keyframes'}
+     */
+    this.learnedPolicy = 'off';
+    /**
+     * What the learned stage gave this source: keyframes done, frames that took learned masks,
+     * masks replaced, regions added, and why the stage stopped (null: it did not).
+     */
+    this.learnedStats = { keyframes: 0, frames: 0, used: 0, added: 0, failed: /** @type {string | null} */ (null) };
     this.lastEdit = '';
     /** Live scores, throttled while tracking. */
     this.scorer = new Scorer(() => this.score());
@@ -192,7 +203,9 @@ export class App {
       ...(this.tracker ? { tracker: this.tracker } : {}),
       ...(this.offlineSettings ? { offlineSettings: this.offlineSettings } : {}),
       offline: src?.kind !== 'webcam',
+      learned: this.learnedPolicy,
     });
+    this.learnedStats = { keyframes: 0, frames: 0, used: 0, added: 0, failed: null };
     /** @type {AnySource} */
     const source = src ?? {
       kind: 'synth',
@@ -442,6 +455,7 @@ export class App {
     if (res.groundTruth && this.gt) {
       for (const g of res.groundTruth) this.gt.add(g);
     }
+    if (res.learned) this.learnedStep(res.learned);
     // Ingest last: it notifies the views.
     this.model.ingest(res.shapes);
     for (const n of this.model.takeNotices()) {
@@ -491,6 +505,24 @@ export class App {
    */
   detectorFor(src) {
     return this.detector === 'auto' && (!src || src.kind === 'synth') ? 'background' : this.detector;
+  }
+
+  /**
+   * Counts what a frame took from the learned stage; says once why it stopped.
+   * @param {NonNullable<StepResult['learned']>} l
+   */
+  learnedStep(l) {
+    const s = this.learnedStats;
+    s.keyframes = l.keyframes;
+    if (l.use) {
+      s.frames += 1;
+      s.used += l.use.used;
+      s.added += l.use.added;
+    }
+    if (l.failed && !s.failed) {
+      s.failed = l.failed;
+      this.status(`learned masks off for this video: ${l.failed}`, true);
+    }
   }
 
   /** Whether the status line shows a warm-up message. */
@@ -1196,6 +1228,12 @@ export class App {
       Promise.resolve()
         .then(() => this.changeDetector(det.value, det.selectedOptions[0]?.text ?? det.value))
         .catch((e) => this.fail(e));
+    });
+    const learned = byId('det-learned', HTMLInputElement);
+    learned.addEventListener('change', () => {
+      this.learnedPolicy = learned.checked ? 'keyframes' : 'off';
+      if (this.session.phase !== 'tracking') return;
+      this.worker.setLearned(this.learnedPolicy).catch((e) => this.fail(e));
     });
     const speed = byId('speed', HTMLSelectElement);
     speed.value = this.speed;

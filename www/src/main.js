@@ -40,6 +40,10 @@ async function main() {
       app.fail(new Error(`?offline= is not JSON: ${e instanceof Error ? e.message : e}`));
     }
   }
+  if (params.get('learned') === 'keyframes') {
+    app.learnedPolicy = 'keyframes';
+    byId('det-learned', HTMLInputElement).checked = true;
+  }
   if (params.get('mode') === 'offline') {
     app.mode = 'offline';
     byId('mode', HTMLSelectElement).value = 'offline';
@@ -110,6 +114,7 @@ function exposeForTests(app) {
       detector: app.detector,
       detectorChoice: app.detectorChoice?.name ?? null,
       boxMask: app.lastBoxMask,
+      learned: app.learnedStats,
     }),
     /** Every record as the table holds it (frame, id, bbox, ...). */
     records: () => app.model.table.all(),

@@ -76,7 +76,9 @@ export function warmLearned() {
  */
 async function runJob(job, buf, onProgress) {
   const seg = segmenter();
-  seg.onProgress = onProgress ? (p) => onProgress({ phase: 'load', ...p }) : null;
+  // Only a caller that reports progress sets it: a keyframe in the background must not
+  // silence a drawn box's progress bar.
+  if (onProgress) seg.onProgress = (p) => onProgress({ phase: 'load', ...p });
   try {
     await seg.start();
   } catch (e) {
@@ -169,5 +171,274 @@ export async function boxMask(core, buf, box, { learned, onProgress }) {
     return { bitmap: frameBitmap(d, width, height), bbox: d.bbox, how: 'refined', ms: performance.now() - t0, note };
   } finally {
     dets.free();
+  }
+}
+
+// ---------------------------------------------------------------- the detector's keyframes
+
+/**
+ * Fewest frames between two keyframes' starts. The net is the bound in practice (a keyframe
+ * takes one whole-frame pass and up to `KEYFRAME_CROPS` crops, 2 s each on this 2-core
+ * machine: the next starts when it is done); this only keeps a fast machine from segmenting
+ * every frame.
+ */
+export const KEYFRAME_EVERY = 10;
+
+/**
+ * Crops per keyframe beyond the whole-frame pass (the core's `max_crops`), the highest
+ * detection scores first: three inferences a keyframe keep the learned masks at most a few
+ * seconds old at this machine's 2 s per inference; a crowded frame's other detections keep
+ * their weights-free masks (or get the whole-frame pass's region).
+ */
+export const KEYFRAME_CROPS = 2;
+
+/**
+ * Frames a keyframe's masks are carried at most. Shifted by their detection's motion, they
+ * follow an object that moves; they do not follow its changes of shape and size, which grow
+ * with time. At 15–25 fps, 3 to 5 seconds: longer than a keyframe takes.
+ */
+export const CARRY_FRAMES = 75;
+
+/**
+ * Frames a learned region no detection gave (an object standing still) is added at most. It
+ * is added where it was on its keyframe: right for a still camera, off by the camera's motion
+ * since then for a moving one, so only briefly (a second at 25 fps); the tracker's track
+ * carries it on.
+ */
+export const REGION_FRAMES = 25;
+
+/** Box IoU above which a learned mask and a detection are the same object (see `apply`). */
+export const MATCH_IOU = 0.3;
+
+/** Share of a learned region's pixels on a current detection above which it is not added. */
+const COVERED = 0.5;
+
+/**
+ * @typedef {{ used: number, added: number, from: number } | null} LearnedUse  what a frame took
+ *   from the learned stage: detections whose mask was replaced by a learned one (`used`),
+ *   learned regions no detection covered, added as detections (`added`, objects that do not
+ *   move), from the keyframe `from`; null when no keyframe's masks were carried
+ *
+ * @typedef {{ keyframes: number, failed: string | null, running: boolean }} LearnedState
+ *   keyframes done, why the stage stopped (the net could not load or run), whether one runs
+ */
+
+/** @param {Box} a @param {Box} b */
+function boxIou(a, b) {
+  const iw = Math.min(a.x + a.w, b.x + b.w) - Math.max(a.x, b.x);
+  const ih = Math.min(a.y + a.h, b.y + b.h) - Math.max(a.y, b.y);
+  if (iw <= 0 || ih <= 0) return 0;
+  return (iw * ih) / (a.w * a.h + b.w * b.h - iw * ih);
+}
+
+/**
+ * `m` moved by whole pixels (`dx`, `dy`) and clipped to the frame; null when nothing is left.
+ * @param {MaskBitmap} m
+ * @param {number} dx
+ * @param {number} dy
+ * @param {number} width
+ * @param {number} height
+ * @returns {MaskBitmap | null}
+ */
+function shiftMask(m, dx, dy, width, height) {
+  const x = m.x + dx;
+  const y = m.y + dy;
+  const x0 = Math.max(0, x);
+  const y0 = Math.max(0, y);
+  const x1 = Math.min(width, x + m.width);
+  const y1 = Math.min(height, y + m.height);
+  if (x1 <= x0 || y1 <= y0) return null;
+  if (x0 === x && y0 === y && x1 - x0 === m.width && y1 - y0 === m.height) return { ...m, x, y };
+  const w = x1 - x0;
+  const data = new Uint8Array(w * (y1 - y0));
+  for (let r = y0; r < y1; r++) {
+    const src = (r - y) * m.width + (x0 - x);
+    data.set(m.data.subarray(src, src + w), (r - y0) * w);
+  }
+  return { x: x0, y: y0, width: w, height: y1 - y0, data };
+}
+
+/** @param {MaskBitmap} m */
+const maskBox = (m) => ({ x: m.x, y: m.y, w: m.width, h: m.height });
+/** @param {Box} b */
+const centre = (b) => [b.x + b.w / 2, b.y + b.h / 2];
+
+/**
+ * The learned stage of the automatic (or any) detector, never in the way of the frames:
+ *
+ * 1. `keyframe`: when no keyframe is under way (and `KEYFRAME_EVERY` frames have passed), the
+ *    frame is copied and a `SegmentJob` started on the copy with the frame's detections as
+ *    boxes, in `proposals` mode (the whole frame first: salient regions no detection covers
+ *    are added, objects that stand still), `KEYFRAME_CROPS` crops at most. It runs on the
+ *    segmenter worker while the tracker goes on with the weights-free masks.
+ * 2. `apply`, every frame: the latest keyframe's learned masks (frame k, now k + m) are
+ *    carried to this frame. A learned mask is matched to the keyframe's detection it came
+ *    from (box IoU ≥ `MATCH_IOU`; a region the whole frame proposed stands for itself), that
+ *    box to this frame's detections (the same), and shifted by the displacement of their
+ *    boxes' centres; it then takes the place of the matched detection's mask. A proposed
+ *    region no detection of this frame matches is added where it was (an object standing
+ *    still), for `REGION_FRAMES` at most, unless a detection covers it. For `CARRY_FRAMES` at
+ *    most, or until the next keyframe's masks arrive.
+ *
+ * If the net cannot load (offline before its first use) or fails, the stage stops for the
+ * session (`state().failed` says why) and the detector's masks go through unchanged.
+ */
+export class LearnedKeyframes {
+  /**
+   * @param {Core} core
+   * @param {number} width
+   * @param {number} height
+   */
+  constructor(core, width, height) {
+    this.core = core;
+    this.width = width;
+    this.height = height;
+    /** @type {FrameBuffer | null} the frame a keyframe looks at (a copy: the tracker goes on) */
+    this.copy = null;
+    /** @type {Promise<void> | null} */
+    this.running = null;
+    this.lastStart = -Infinity;
+    /** @type {{ frame: number, inputs: Box[], learned: DetectionJs[] } | null} the latest keyframe's result */
+    this.result = null;
+    this.keyframes = 0;
+    /** @type {string | null} */
+    this.failed = null;
+    this.disposed = false;
+  }
+
+  /** @returns {LearnedState} */
+  state() {
+    return { keyframes: this.keyframes, failed: this.failed, running: this.running !== null };
+  }
+
+  /**
+   * Starts a keyframe on frame `frame` (its pixels and the detector's `dets`) when none is
+   * under way; returns at once either way.
+   * @param {number} frame
+   * @param {() => Uint8ClampedArray} pixels a fresh RGBA view on the frame buffer
+   * @param {Detections} dets
+   * @param {WebAssembly.Memory} memory
+   */
+  keyframe(frame, pixels, dets, memory) {
+    if (this.running || this.failed || this.disposed || frame - this.lastStart < KEYFRAME_EVERY) return;
+    this.copy ??= new this.core.FrameBuffer(this.width, this.height);
+    // Views made after the allocation above: it may have grown (and detached) wasm memory.
+    new Uint8ClampedArray(memory.buffer, this.copy.ptr(), this.copy.len()).set(pixels());
+    // Boxes only: a detection comes back with a mask exactly when the net found its object.
+    const given = dets.toList();
+    const inputs = given.map((d) => d.bbox);
+    const boxes = this.core.Detections.fromLists({ boxes: given.map((d) => ({ bbox: d.bbox, score: d.score, class: d.class })) });
+    /** @type {import('../../pkg/shapetrack.js').SegmentJob} */
+    let job;
+    try {
+      job = new this.core.SegmentJob(this.copy, boxes, 'proposals', { max_crops: KEYFRAME_CROPS });
+    } finally {
+      boxes.free();
+    }
+    this.lastStart = frame;
+    const copy = this.copy;
+    this.running = runJob(job, copy)
+      .then(() => {
+        const done = job.finish();
+        try {
+          if (!this.disposed) {
+            this.result = { frame, inputs, learned: done.toList().filter((d) => d.mask) };
+            this.keyframes += 1;
+          }
+        } finally {
+          done.free();
+        }
+      })
+      .catch((/** @type {unknown} */ e) => {
+        this.failed = e instanceof Error ? e.message : String(e);
+      })
+      .finally(() => {
+        job.free();
+        this.running = null;
+      });
+  }
+
+  /**
+   * `dets` (frame `frame`'s, consumed) with the latest keyframe's learned masks carried over
+   * (see the class); `dets` itself when there are none to carry.
+   * @param {number} frame
+   * @param {Detections} dets
+   * @returns {{ dets: Detections, use: LearnedUse }}
+   */
+  apply(frame, dets) {
+    const r = this.result;
+    if (!r || frame < r.frame || frame - r.frame > CARRY_FRAMES || r.learned.length === 0) return { dets, use: null };
+    const list = dets.toList();
+    /** @type {Array<{ mask: MaskBitmap, iou: number } | null>} the learned mask each detection takes */
+    const take = list.map(() => null);
+    /** @type {import('./detectors.js').MaskInput[]} */
+    const regions = [];
+    for (const l of r.learned) {
+      const lm = /** @type {MaskBitmap} */ (l.mask);
+      let k = -1;
+      let best = MATCH_IOU;
+      r.inputs.forEach((b, i) => {
+        const v = boxIou(b, l.bbox);
+        if (v >= best) [k, best] = [i, v];
+      });
+      // The keyframe's box of this object: the detection it came from, or (a region the
+      // whole frame proposed) its own.
+      const kb = k >= 0 ? r.inputs[k] : l.bbox;
+      let j = -1;
+      let bj = MATCH_IOU;
+      list.forEach((d, i) => {
+        const v = boxIou(kb, d.bbox);
+        if (v >= bj) [j, bj] = [i, v];
+      });
+      if (j < 0) {
+        // Not detected now: a region is added for a while (an object standing still); a
+        // detection's object has gone, nothing to correct.
+        if (k < 0 && frame - r.frame <= REGION_FRAMES) regions.push({ ...lm, score: l.score, class: l.class });
+        continue;
+      }
+      const [kx, ky] = centre(kb);
+      const [dx, dy] = centre(list[j].bbox);
+      const moved = shiftMask(lm, Math.round(dx - kx), Math.round(dy - ky), this.width, this.height);
+      if (moved && (!take[j] || bj > /** @type {{ iou: number }} */ (take[j]).iou)) take[j] = { mask: moved, iou: bj };
+    }
+    let used = 0;
+    /** @type {import('./detectors.js').MaskInput[]} */
+    const masks = [];
+    /** @type {import('./detectors.js').BoxInput[]} */
+    const boxes = [];
+    list.forEach((d, i) => {
+      const t = take[i];
+      if (t) used += 1;
+      const m = t?.mask ?? d.mask;
+      if (m) masks.push({ ...m, score: d.score, class: d.class });
+      else boxes.push({ bbox: d.bbox, score: d.score, class: d.class });
+    });
+    if (used === 0 && regions.length === 0) return { dets, use: null };
+    const out = this.core.Detections.fromLists({ masks, boxes });
+    let added = 0;
+    try {
+      if (regions.length) {
+        const extra = this.core.Detections.fromLists({ masks: regions });
+        try {
+          added = out.addUncovered(extra, COVERED);
+        } finally {
+          extra.free();
+        }
+      }
+    } catch (e) {
+      out.free();
+      throw e;
+    }
+    dets.free();
+    return { dets: out, use: used + added > 0 ? { used, added, from: r.frame } : null };
+  }
+
+  /** Stops using the net (a keyframe under way finishes unseen) and frees the frame copy. */
+  dispose() {
+    this.disposed = true;
+    const copy = this.copy;
+    this.copy = null;
+    if (this.running) void this.running.finally(() => copy?.free());
+    else copy?.free();
   }
 }

@@ -32,9 +32,11 @@
  *   detectorOptions?: Record<string, unknown>,
  *   offline?: boolean,
  *   offlineSettings?: Omit<import('../../pkg/shapetrack.js').OfflineSettings, 'fps'>,
+ *   learned?: 'off' | 'keyframes',
  * }} OpenRequest  `offline`: keep what the offline pass needs (a video or image sequence
  *   with an end; not the webcam), so `finish` can run it; `offlineSettings`: that pass's
- *   settings over the core's defaults (the frame rate is the source's)
+ *   settings over the core's defaults (the frame rate is the source's); `learned`: the
+ *   detector's learned stage (worker/learned.js's LearnedKeyframes; default off)
  *
  * @typedef {{ width: number, height: number, frames: number | null, fps: number, hasGroundTruth: boolean, version: string, classes: string[], offline: boolean }} OpenResult
  *   `classes`: the detector's class names by class id (empty when it has none; an empty name
@@ -55,8 +57,10 @@
  *   warmup: import('./detectors.js').Warmup | null,
  *   choice: import('./detectors.js').Choice | null,
  *   detected?: import('../../pkg/shapetrack.js').DetectionList,
- * }} StepResult  `warmup`: how far the detector's model has learnt the scene (a background
- *   model's first frames detect nothing); null for detectors that need no warm-up; `choice`:
+ *   learned: (import('./learned.js').LearnedState & { use: import('./learned.js').LearnedUse }) | null,
+ * }} StepResult  `learned`: what this frame took from the detector's learned stage, and the
+ *   stage's state (null: off); `warmup`: how far the detector's model has learnt the scene (a
+ *   background model's first frames detect nothing); null for detectors that need no warm-up; `choice`:
  *   the detector the automatic one chose, once it has; `detected`: the detector's own output
  *   (boxes, cropped masks, scores, classes), only when the step asked for it with
  *   `detections: true` (tools that score a detector apart from the tracker, e.g.
@@ -76,6 +80,7 @@
  *   | { type: 'followStep', frame: number, bitmap?: ImageBitmap }
  *   | { type: 'followEnd' }
  *   | { type: 'learnedWarm' }
+ *   | { type: 'setLearned', learned: 'off' | 'keyframes' }
  *   | { type: 'boxMask', frame: number, box: { x: number, y: number, w: number, h: number }, learned: boolean, bitmap?: ImageBitmap }
  *   | { type: 'tracks' }
  *   | { type: 'close' }} Request
@@ -218,6 +223,15 @@ export class WorkerClient {
   /** Ends the follow under way. @returns {Promise<{}>} */
   followEnd() {
     return this.request({ type: 'followEnd' });
+  }
+
+  /**
+   * Turns the detector's learned stage on or off for the open session.
+   * @param {'off' | 'keyframes'} learned
+   * @returns {Promise<{}>}
+   */
+  setLearned(learned) {
+    return this.request({ type: 'setLearned', learned });
   }
 
   /**

@@ -14,7 +14,7 @@
 import { loadCore } from '../lib/core.js';
 import { createDetector } from './detectors.js';
 import { SceneFeed } from './feed.js';
-import { boxMask, warmLearned } from './learned.js';
+import { LearnedKeyframes, boxMask, warmLearned } from './learned.js';
 
 /** @typedef {import('../lib/core.js').Core} Core */
 /** @typedef {import('./protocol.js').Request & { id: number }} Req */
@@ -43,11 +43,14 @@ const ctx = /** @type {DedicatedWorkerGlobalScope} */ (/** @type {unknown} */ (s
  *     offline: import('../../pkg/shapetrack.js').OfflineSettings | null,
  *   },
  *   reported: boolean,
+ *   learned: LearnedKeyframes | null,
+ *   learnedPolicy: 'off' | 'keyframes',
  * }} Session  `feed`: the scene feeder rendering the synthetic frames ahead (null: this worker
  *   renders them); `follower`: the shape being followed (`followStart`); `followTo`: the frame its
  *   leg ends at; `cache`: synthetic frames rendered ahead of a backward leg (see `followFrame`);
  *   `trackerSettings`: what the tracker was built from (the detector's settings, the page's
- *   over them, the offline options); `reported`: whether the tracker has reported a shape
+ *   over them, the offline options); `reported`: whether the tracker has reported a shape;
+ *   `learned`: the detector's learned stage (null: off, or a detector that needs the scene)
  */
 
 /** @type {Session | null} */
@@ -108,6 +111,9 @@ async function dispatch(req) {
     case 'followEnd':
       followEnd();
       return { result: {}, transfer: [] };
+    case 'setLearned':
+      setLearned(need(), req.learned);
+      return { result: {}, transfer: [] };
     case 'learnedWarm':
       warmLearned();
       return { result: {}, transfer: [] };
@@ -138,6 +144,7 @@ function need() {
 function close() {
   if (!session) return;
   followEnd();
+  session.learned?.dispose();
   session.detector.dispose?.();
   session.tracker.free();
   session.buffer.free();
@@ -194,7 +201,10 @@ async function open(req) {
     cache: new Map(),
     trackerSettings,
     reported: false,
+    learned: null,
+    learnedPolicy: 'off',
   };
+  setLearned(session, req.learned);
   return {
     width,
     height,
@@ -205,6 +215,22 @@ async function open(req) {
     classes: detector.classes ?? [],
     offline: tracker.offline,
   };
+}
+
+/**
+ * Turns the detector's learned stage on (`keyframes`) or off (./learned.js). Not for a
+ * detector that reads the synthetic scene's own masks: they are the truth already.
+ * @param {Session} s
+ * @param {'off' | 'keyframes' | undefined} policy
+ */
+function setLearned(s, policy) {
+  s.learnedPolicy = policy ?? 'off';
+  const on = s.learnedPolicy === 'keyframes' && s.detector.needsScene !== true;
+  if (on === (s.learned !== null)) return;
+  s.learned?.dispose();
+  s.learned = on ? new LearnedKeyframes(s.core, s.width, s.height) : null;
+  // The net's load (2 s or more) starts now, not on the first keyframe.
+  if (on) warmLearned();
 }
 
 /**
@@ -220,6 +246,7 @@ async function setDetector(name, options) {
   await detector.init({ core: s.core, width: s.width, height: s.height });
   s.detector.dispose?.();
   s.detector = detector;
+  setLearned(s, s.learnedPolicy);
   return { classes: detector.classes ?? [] };
 }
 
@@ -372,7 +399,22 @@ async function step(frame, bitmap, display, withDetections = false) {
     bitmap,
     scene: synthetic?.detections ?? null,
   });
-  const dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(out);
+  let dets = out instanceof s.core.Detections ? out : s.core.Detections.fromLists(out);
+  /** @type {import('./learned.js').LearnedUse} */
+  let learnedUse = null;
+  if (s.learned) {
+    // Never waits for the net: a keyframe starts in the background when none runs, and the
+    // last one's masks, carried to this frame, replace the detector's.
+    try {
+      s.learned.keyframe(frame, () => pixels(s), dets, s.memory);
+      const applied = s.learned.apply(frame, dets);
+      dets = applied.dets;
+      learnedUse = applied.use;
+    } catch (e) {
+      dets.free();
+      throw e;
+    }
+  }
   const t2 = performance.now();
   const detections = dets.len;
   /** @type {import('../../pkg/shapetrack.js').Shapes} */
@@ -404,6 +446,7 @@ async function step(frame, bitmap, display, withDetections = false) {
     timings: { detect: t2 - t1, track: t3 - t2, total: t3 - t0 },
     warmup: s.detector.warmup?.() ?? null,
     choice: s.detector.choice?.() ?? null,
+    learned: s.learned ? { use: learnedUse, ...s.learned.state() } : null,
     ...(detected ? { detected } : {}),
   };
 }
