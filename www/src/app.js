@@ -117,7 +117,7 @@ export class App {
      * What the learned stage gave this source: keyframes done, frames that took learned masks,
      * masks replaced, regions added, and why the stage stopped (null: it did not).
      */
-    this.learnedStats = { keyframes: 0, frames: 0, used: 0, added: 0, failed: /** @type {string | null} */ (null) };
+    this.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, failed: /** @type {string | null} */ (null) };
     this.lastEdit = '';
     /** Live scores, throttled while tracking. */
     this.scorer = new Scorer(() => this.score());
@@ -205,7 +205,7 @@ export class App {
       offline: src?.kind !== 'webcam',
       learned: this.learnedPolicy,
     });
-    this.learnedStats = { keyframes: 0, frames: 0, used: 0, added: 0, failed: null };
+    this.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, failed: null };
     /** @type {AnySource} */
     const source = src ?? {
       kind: 'synth',
@@ -514,6 +514,7 @@ export class App {
   learnedStep(l) {
     const s = this.learnedStats;
     s.keyframes = l.keyframes;
+    s.ms = l.ms;
     if (l.use) {
       s.frames += 1;
       s.used += l.use.used;

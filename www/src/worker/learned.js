@@ -54,14 +54,16 @@ function forgetSegmenter() {
  * asks when the labeller picks the box tool, so the load (2 s or more) and the first
  * inference's extra cost (the runtime allocates and tiers up: ~1.5 s more than later ones)
  * pass while the box is drawn. A failure is forgotten here (the next use tries again and
- * reports it).
+ * reports it). `run: false` loads only (the detector's keyframes: a zero inference there
+ * would take a core from the tracker for nothing).
+ * @param {{ run?: boolean }} [opts]
  */
-export function warmLearned() {
+export function warmLearned({ run = true } = {}) {
   const seg = segmenter();
   if (seg.info) return;
   seg
     .start()
-    .then(() => seg.run(new Float32Array(INPUT_LENGTH), { transfer: true }))
+    .then(() => (run ? seg.run(new Float32Array(INPUT_LENGTH), { transfer: true }) : undefined))
     .catch(() => {
       if (client === seg && !seg.info) forgetSegmenter();
     });
@@ -177,31 +179,39 @@ export async function boxMask(core, buf, box, { learned, onProgress }) {
 // ---------------------------------------------------------------- the detector's keyframes
 
 /**
- * Fewest frames between two keyframes' starts. The net is the bound in practice (a keyframe
- * takes one whole-frame pass and up to `KEYFRAME_CROPS` crops, 2 s each on this 2-core
- * machine: the next starts when it is done); this only keeps a fast machine from segmenting
- * every frame.
+ * Frames between two keyframes' starts while the detections stay as they were: the net runs
+ * on a core the tracker and the page share on a 2-core machine, and back to back it cost the
+ * tracker 40 % of its frames (scripts/bench-learned-fps.mjs, 2026-12-06); a keyframe every two
+ * seconds or so at the tracker's rate leaves it most of the time.
  */
-export const KEYFRAME_EVERY = 10;
+export const KEYFRAME_EVERY = 50;
+
+/**
+ * Fewest frames between two keyframes' starts when the frame has another number of
+ * detections than the last keyframe had (a new object, or one lost: its masks are the ones
+ * to learn).
+ */
+export const KEYFRAME_MIN_GAP = 10;
 
 /**
  * Crops per keyframe beyond the whole-frame pass (the core's `max_crops`), the highest
- * detection scores first: three inferences a keyframe keep the learned masks at most a few
- * seconds old at this machine's 2 s per inference; a crowded frame's other detections keep
- * their weights-free masks (or get the whole-frame pass's region).
+ * detection score first: two inferences a keyframe (4 s or more on this 2-core machine) keep
+ * the learned masks a few seconds old at most; a crowded frame's other detections keep their
+ * weights-free masks (or get the whole-frame pass's region).
  */
-export const KEYFRAME_CROPS = 2;
+export const KEYFRAME_CROPS = 1;
 
 /**
- * Frames a keyframe's masks are carried at most. Shifted by their detection's motion, they
- * follow an object that moves; they do not follow its changes of shape and size, which grow
- * with time. At 15–25 fps, 3 to 5 seconds: longer than a keyframe takes.
+ * Frames a keyframe's masks are carried after they arrive (they are then as old as the
+ * keyframe took, plus this). Shifted by their detection's motion, they follow an object that
+ * moves; they do not follow its changes of shape and size, which grow with time: 3 seconds at
+ * 25 fps.
  */
 export const CARRY_FRAMES = 75;
 
 /**
- * Frames a learned region no detection gave (an object standing still) is added at most. It
- * is added where it was on its keyframe: right for a still camera, off by the camera's motion
+ * Frames a learned region no detection gave (an object standing still) is added at most,
+ * after it arrives. It is added where it was on its keyframe: right for a still camera, off by the camera's motion
  * since then for a moving one, so only briefly (a second at 25 fps); the tracker's track
  * carries it on.
  */
@@ -219,8 +229,10 @@ const COVERED = 0.5;
  *   learned regions no detection covered, added as detections (`added`, objects that do not
  *   move), from the keyframe `from`; null when no keyframe's masks were carried
  *
- * @typedef {{ keyframes: number, failed: string | null, running: boolean }} LearnedState
- *   keyframes done, why the stage stopped (the net could not load or run), whether one runs
+ * @typedef {{ keyframes: number, failed: string | null, running: boolean, ms: number }} LearnedState
+ *   keyframes done, why the stage stopped (the net could not load or run), whether one runs,
+ *   and how long the last one took (ms, from its start to its masks; the net's load included
+ *   for the first)
  */
 
 /** @param {Box} a @param {Box} b */
@@ -266,8 +278,8 @@ const centre = (b) => [b.x + b.w / 2, b.y + b.h / 2];
 /**
  * The learned stage of the automatic (or any) detector, never in the way of the frames:
  *
- * 1. `keyframe`: when no keyframe is under way (and `KEYFRAME_EVERY` frames have passed), the
- *    frame is copied and a `SegmentJob` started on the copy with the frame's detections as
+ * 1. `keyframe`: when no keyframe is under way and `KEYFRAME_EVERY` frames have passed (or
+ *    `KEYFRAME_MIN_GAP`, when the number of detections changed), the frame is copied and a `SegmentJob` started on the copy with the frame's detections as
  *    boxes, in `proposals` mode (the whole frame first: salient regions no detection covers
  *    are added, objects that stand still), `KEYFRAME_CROPS` crops at most. It runs on the
  *    segmenter worker while the tracker goes on with the weights-free masks.
@@ -278,7 +290,7 @@ const centre = (b) => [b.x + b.w / 2, b.y + b.h / 2];
  *    boxes' centres; it then takes the place of the matched detection's mask. A proposed
  *    region no detection of this frame matches is added where it was (an object standing
  *    still), for `REGION_FRAMES` at most, unless a detection covers it. For `CARRY_FRAMES` at
- *    most, or until the next keyframe's masks arrive.
+ *    most after they arrive, or until the next keyframe's masks do.
  *
  * If the net cannot load (offline before its first use) or fails, the stage stops for the
  * session (`state().failed` says why) and the detector's masks go through unchanged.
@@ -298,9 +310,13 @@ export class LearnedKeyframes {
     /** @type {Promise<void> | null} */
     this.running = null;
     this.lastStart = -Infinity;
-    /** @type {{ frame: number, inputs: Box[], learned: DetectionJs[] } | null} the latest keyframe's result */
+    /** detections of the last keyframe */
+    this.lastCount = -1;
+    /** @type {{ frame: number, arrived: number, inputs: Box[], learned: DetectionJs[] } | null}
+     * the latest keyframe's result (`arrived`: the first frame it was applied to) */
     this.result = null;
     this.keyframes = 0;
+    this.ms = 0;
     /** @type {string | null} */
     this.failed = null;
     this.disposed = false;
@@ -308,7 +324,7 @@ export class LearnedKeyframes {
 
   /** @returns {LearnedState} */
   state() {
-    return { keyframes: this.keyframes, failed: this.failed, running: this.running !== null };
+    return { keyframes: this.keyframes, failed: this.failed, running: this.running !== null, ms: this.ms };
   }
 
   /**
@@ -320,7 +336,9 @@ export class LearnedKeyframes {
    * @param {WebAssembly.Memory} memory
    */
   keyframe(frame, pixels, dets, memory) {
-    if (this.running || this.failed || this.disposed || frame - this.lastStart < KEYFRAME_EVERY) return;
+    if (this.running || this.failed || this.disposed) return;
+    const since = frame - this.lastStart;
+    if (since < KEYFRAME_MIN_GAP || (since < KEYFRAME_EVERY && dets.len === this.lastCount)) return;
     this.copy ??= new this.core.FrameBuffer(this.width, this.height);
     // Views made after the allocation above: it may have grown (and detached) wasm memory.
     new Uint8ClampedArray(memory.buffer, this.copy.ptr(), this.copy.len()).set(pixels());
@@ -336,14 +354,17 @@ export class LearnedKeyframes {
       boxes.free();
     }
     this.lastStart = frame;
+    this.lastCount = given.length;
     const copy = this.copy;
+    const t0 = performance.now();
     this.running = runJob(job, copy)
       .then(() => {
         const done = job.finish();
         try {
           if (!this.disposed) {
-            this.result = { frame, inputs, learned: done.toList().filter((d) => d.mask) };
+            this.result = { frame, arrived: -1, inputs, learned: done.toList().filter((d) => d.mask) };
             this.keyframes += 1;
+            this.ms = performance.now() - t0;
           }
         } finally {
           done.free();
@@ -367,7 +388,9 @@ export class LearnedKeyframes {
    */
   apply(frame, dets) {
     const r = this.result;
-    if (!r || frame < r.frame || frame - r.frame > CARRY_FRAMES || r.learned.length === 0) return { dets, use: null };
+    if (!r || frame < r.frame || r.learned.length === 0) return { dets, use: null };
+    if (r.arrived < 0) r.arrived = frame;
+    if (frame - r.arrived > CARRY_FRAMES) return { dets, use: null };
     const list = dets.toList();
     /** @type {Array<{ mask: MaskBitmap, iou: number } | null>} the learned mask each detection takes */
     const take = list.map(() => null);
@@ -393,7 +416,7 @@ export class LearnedKeyframes {
       if (j < 0) {
         // Not detected now: a region is added for a while (an object standing still); a
         // detection's object has gone, nothing to correct.
-        if (k < 0 && frame - r.frame <= REGION_FRAMES) regions.push({ ...lm, score: l.score, class: l.class });
+        if (k < 0 && frame - r.arrived <= REGION_FRAMES) regions.push({ ...lm, score: l.score, class: l.class });
         continue;
       }
       const [kx, ky] = centre(kb);

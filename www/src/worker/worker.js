@@ -230,7 +230,7 @@ function setLearned(s, policy) {
   s.learned?.dispose();
   s.learned = on ? new LearnedKeyframes(s.core, s.width, s.height) : null;
   // The net's load (2 s or more) starts now, not on the first keyframe.
-  if (on) warmLearned();
+  if (on) warmLearned({ run: false });
 }
 
 /**

@@ -1,0 +1,113 @@
+#!/usr/bin/env node
+// Benchmark: the app's tracking rate on real moving-camera video at 854×480 (DAVIS-2016 clips
+// from ../shared/data/davis2016-moving, opened as an image sequence, played at full speed with
+// the automatic detector) per learned-stage policy (issue 63): `off` (the weights-free masks)
+// and `keyframes` (worker/learned.js: the segmenter runs in the background on a keyframe
+// whenever it is free; the tracker never waits for it). Headless Chromium from www/dist (build
+// first: `npm run build`). A first visit caches the segmenter's files (as a returning user has
+// them); each run opens its clip in a fresh page (the net loads from the service worker's
+// cache as the clip opens, as in the app); each clip is played `--repeat` times over (default
+// 3) in one sequence, so the keyframes have time to land. fps = frames tracked / wall time from Play to the
+// last frame. A benchmark, not a test: nothing fails on a slow run.
+//
+//   npm run build && node scripts/bench-learned-fps.mjs [--clips bus,camel] [--policies off,keyframes]
+//     [--repeat N] [--port P]
+
+import { readFileSync, readdirSync } from 'node:fs';
+import { join } from 'node:path';
+import { DIST, ROOT, launch, serve, watchErrors } from '../tests/e2e/harness.mjs';
+
+const text = (/** @type {string} */ name) => {
+  const i = process.argv.indexOf(name);
+  return i >= 0 ? process.argv[i + 1] : undefined;
+};
+const CLIPS = (text('--clips') ?? 'bus,camel,car-roundabout,dog').split(',');
+const POLICIES = (text('--policies') ?? 'off,keyframes').split(',');
+const PORT = Number(text('--port') ?? 47436);
+/**
+ * Times each clip is played in one sequence (a cut at each restart): a DAVIS clip is 3 to 4
+ * seconds of tracking, shorter than the segmenter's load and first keyframe.
+ */
+const REPEAT = Number(text('--repeat') ?? 3);
+const DAVIS = join(ROOT, '..', 'shared', 'data', 'davis2016-moving', 'DAVIS', 'JPEGImages', '480p');
+
+/** @param {string} clip */
+const frames = (clip) =>
+  readdirSync(join(DAVIS, clip))
+    .filter((f) => f.endsWith('.jpg'))
+    .sort()
+    .map((f) => join(DAVIS, clip, f));
+
+/**
+ * @param {import('playwright-core').Page} page
+ * @param {(s: any) => boolean} pred
+ */
+async function until(page, pred) {
+  for (;;) {
+    const s = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+    if (pred(s)) return s;
+    await page.waitForTimeout(50);
+  }
+}
+
+/**
+ * @param {{ context: import('playwright-core').BrowserContext }} browser
+ * @param {string} url
+ * @param {string} clip
+ * @param {string} policy
+ */
+async function run(browser, url, clip, policy) {
+  const page = await browser.context.newPage();
+  const errors = watchErrors(page);
+  try {
+    await page.goto(`${url}?demo=0&speed=max&learned=${policy}`);
+    await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+    await page.evaluate(async () => {
+      await navigator.serviceWorker.ready;
+      if (!navigator.serviceWorker.controller) {
+        await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
+      }
+    });
+    const one = frames(clip).map((f) => readFileSync(f));
+    const files = Array.from({ length: REPEAT }, (_, k) =>
+      one.map((buffer, i) => ({ name: `${k}-${String(i).padStart(5, '0')}.jpg`, mimeType: 'image/jpeg', buffer })),
+    ).flat();
+    await page.setInputFiles('#file-images', files);
+    const s0 = await until(page, (s) => s.processed >= 1 && !s.playing);
+    const t0 = Date.now();
+    await page.keyboard.press('Space');
+    const s1 = await until(page, (s) => s.processed === s.frames && !s.playing);
+    const secs = (Date.now() - t0) / 1000;
+    return { clip, policy, frames: s1.processed - s0.processed, fps: (s1.processed - s0.processed) / secs, learned: s1.learned, choice: s1.detectorChoice, errors };
+  } finally {
+    await page.close();
+  }
+}
+
+const server = await serve(DIST, PORT);
+const browser = await launch();
+try {
+  // The first visit: the segmenter's files fetched once and cached by the service worker.
+  await run(browser, server.url, CLIPS[0], 'keyframes');
+  /** @type {Record<string, number[]>} */
+  const byPolicy = {};
+  for (const clip of CLIPS) {
+    for (const policy of POLICIES) {
+      const r = await run(browser, server.url, clip, policy);
+      (byPolicy[policy] ??= []).push(r.fps);
+      const l = r.learned;
+      console.log(
+        `${clip} (${r.frames} frames, ${r.choice}), learned ${policy}: ${r.fps.toFixed(1)} fps` +
+          (policy === 'keyframes' ? `; keyframes done ${l.keyframes}${l.keyframes ? ` (last ${(l.ms / 1000).toFixed(1)} s)` : ''}, frames with learned masks ${l.frames} (replaced ${l.used}, added ${l.added})${l.failed ? `, failed: ${l.failed}` : ''}` : '') +
+          (r.errors.length ? `; page errors: ${r.errors.join('; ')}` : ''),
+      );
+    }
+  }
+  for (const [policy, fps] of Object.entries(byPolicy)) {
+    console.log(`mean over ${fps.length} clips, learned ${policy}: ${(fps.reduce((a, b) => a + b, 0) / fps.length).toFixed(1)} fps`);
+  }
+  console.log(`Chromium ${browser.context.browser()?.version() ?? ''}, 854×480, load average ${(await import('node:os')).loadavg().map((x) => x.toFixed(2)).join(' ')}`);
+} finally {
+  await browser.close();
+  await server.close();
+}
