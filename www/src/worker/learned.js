@@ -252,7 +252,7 @@ function boxIou(a, b) {
  * @param {number} height
  * @returns {MaskBitmap | null}
  */
-function shiftMask(m, dx, dy, width, height) {
+export function shiftMask(m, dx, dy, width, height) {
   const x = m.x + dx;
   const y = m.y + dy;
   const x0 = Math.max(0, x);
