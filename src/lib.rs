@@ -10,6 +10,8 @@
 //!
 //! - [`frame`]: frames (borrowed RGB/RGBA views), boxes, masks, detections, tracked shapes.
 //! - [`detect`]: the adaptive background subtractor and the [`detect::Detector`] trait.
+//! - [`segment`]: learned segmentation (U²-Net-p): boxes, blobs and whole frames into object
+//!   masks, one state machine for the CLI (tract) and the browser (onnxruntime-web).
 //! - [`geometry`]: Canny edges and contours, moments, Delaunay shells, GJK, broad phase.
 //! - [`features`]: SIFT, shape context, spatial colour analyser.
 //! - [`follow`]: following one user-given target without (or with) detections; shape-aware
@@ -42,6 +44,7 @@ pub mod motion;
 pub mod region;
 mod runs;
 mod scratch;
+pub mod segment;
 pub mod settings;
 pub mod synth;
 pub mod track;
