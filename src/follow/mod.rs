@@ -37,6 +37,7 @@ use thiserror::Error;
 use crate::features::sift::{self, MatchConfig, SiftConfig, SiftError, SiftFeatures};
 use crate::features::transform::{ransac, RansacConfig, Transform, TransformKind, Translation};
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
+use crate::segment::{input_tensor, Crop, Net, Saliency, SegmentConfig, SegmentError, INPUT_LEN};
 use colour::{ColourModel, RefineParams, Ring};
 
 /// Errors of the follower. Every bad input is one of these, never a panic.
@@ -109,6 +110,9 @@ pub enum FollowError {
     /// SIFT failed (only on invalid settings: images are checked first).
     #[error(transparent)]
     Sift(#[from] SiftError),
+    /// The learned segmentation failed (its network, or a map of the wrong size).
+    #[error(transparent)]
+    Segment(#[from] SegmentError),
 }
 
 /// Settings of the follower. `Default` gives the documented values, chosen on synthetic
@@ -168,6 +172,26 @@ pub struct FollowConfig {
     /// with the band cut alone (before the colour test was added), 0.6 scored 0.571, 0.7
     /// 0.584, 0.8 0.641 and 0.9 0.625 (0.624 without detections); with both, 0.8 scores 0.641.
     pub detection_iou: f64,
+    /// A learned mask (the segmentation model on the crop around the predicted box,
+    /// [`Follower::learned_crop`]) whose IoU with the followed outline reaches this replaces
+    /// it, and the model is re-learnt from it: the follower re-anchors on the object instead
+    /// of drifting with its own errors. Lower than `detection_iou`: the model's outline is
+    /// the object's, where a motion detector's carries ground and shadow. Chosen on the 21
+    /// DAVIS clips of `../shared/data` (tests/data/follow/README.md).
+    pub learned_iou: f64,
+    /// Largest share of the follower's own estimate a learned outline may lose in one frame
+    /// (it may grow as far as `learned_iou` allows: a follower that holds part of its object
+    /// is corrected by a larger learned outline). A crop around a part of the object shows
+    /// the network that part as the salient whole: taken, the next crop is smaller still, and
+    /// the outline collapsed onto the rider of a soapbox (DAVIS soapbox, J 0.62 → 0.28)
+    /// without this bound.
+    pub learned_max_shrink: f64,
+    /// When the follower is lost (its own estimate is not trusted), a learned region whose
+    /// IoU with the prediction (the last outline moved by the last motion) reaches this is
+    /// taken instead: the follower finds its object again after an occlusion or a fast move.
+    pub reanchor_iou: f64,
+    /// The learned segmentation's crop and threshold settings.
+    pub segment: SegmentConfig,
     /// RANSAC seed.
     pub seed: u64,
 }
@@ -190,6 +214,10 @@ impl Default for FollowConfig {
             lost_confidence: 0.3,
             max_lost: 15,
             detection_iou: 0.8,
+            learned_iou: 0.5,
+            learned_max_shrink: 0.2,
+            reanchor_iou: 0.3,
+            segment: SegmentConfig::default(),
             seed: 0x5eed_f011,
         }
     }
@@ -235,6 +263,18 @@ impl FollowConfig {
         if !(0.0..=1.0).contains(&self.detection_iou) {
             return bad("detection_iou", "must be in [0, 1]");
         }
+        if !(0.0..=1.0).contains(&self.learned_iou) {
+            return bad("learned_iou", "must be in [0, 1]");
+        }
+        if !(0.0..=1.0).contains(&self.learned_max_shrink) {
+            return bad("learned_max_shrink", "must be in [0, 1]");
+        }
+        if !(0.0..=1.0).contains(&self.reanchor_iou) {
+            return bad("reanchor_iou", "must be in [0, 1]");
+        }
+        if self.segment.validate().is_err() {
+            return bad("segment", "has a field out of range (see SegmentConfig)");
+        }
         Ok(())
     }
 
@@ -265,6 +305,9 @@ pub struct FollowStep {
     pub inliers: usize,
     /// A detection's mask was taken for this frame.
     pub from_detection: bool,
+    /// The learned segmentation's mask was taken for this frame.
+    #[serde(default)]
+    pub from_learned: bool,
 }
 
 /// What the follower knows of the target at its last confident frame.
@@ -348,12 +391,74 @@ impl Follower {
         self.stopped
     }
 
+    /// Its settings.
+    pub fn config(&self) -> &FollowConfig {
+        &self.cfg
+    }
+
     /// Follows the target into the next frame (in the direction of travel). `detections` may
     /// be empty (no detector).
     pub fn step(
         &mut self,
         frame: &Frame<'_>,
         detections: &[Detection],
+    ) -> Result<FollowStep, FollowError> {
+        self.step_learned(frame, detections, None)
+    }
+
+    /// Where the target is expected in the next frame: the last outline's box moved by the
+    /// last motion.
+    fn predicted_box(&self) -> BBox {
+        self.last
+            .bbox()
+            .translated(self.velocity.x, self.velocity.y)
+    }
+
+    /// The crop the learned segmentation should see for the next frame: the predicted box
+    /// grown by the segmentation's margin, more while the target is lost. `None` once
+    /// stopped.
+    pub fn learned_crop(&self) -> Option<Crop> {
+        if self.stopped {
+            return None;
+        }
+        let b = self.predicted_box();
+        let grow = 1.0 + 0.5 * self.lost_run as f64;
+        Crop::around(
+            &b,
+            self.width,
+            self.height,
+            self.cfg.segment.margin * grow,
+            self.cfg.segment.min_crop,
+        )
+    }
+
+    /// [`Follower::step`] with the learned segmentation run by `net` on
+    /// [`Follower::learned_crop`] (the synchronous case of [`Follower::step_learned`]).
+    pub fn step_with_net(
+        &mut self,
+        frame: &Frame<'_>,
+        detections: &[Detection],
+        net: &mut dyn Net,
+    ) -> Result<FollowStep, FollowError> {
+        let sal = match self.learned_crop() {
+            Some(crop) if (frame.width(), frame.height()) == (self.width, self.height) => {
+                let mut input = vec![0f32; INPUT_LEN];
+                input_tensor(frame, &crop, &mut input)?;
+                let out = net.run(&input)?;
+                Some(Saliency::new(crop, &out, self.cfg.segment.stretch)?)
+            }
+            _ => None,
+        };
+        self.step_learned(frame, detections, sal.as_ref())
+    }
+
+    /// [`Follower::step`] with the learned segmentation's map of [`Follower::learned_crop`]
+    /// for this frame (`None`: without).
+    pub fn step_learned(
+        &mut self,
+        frame: &Frame<'_>,
+        detections: &[Detection],
+        learned: Option<&Saliency>,
     ) -> Result<FollowStep, FollowError> {
         if frame.width() != self.width || frame.height() != self.height {
             return Err(FollowError::FrameSize {
@@ -372,7 +477,19 @@ impl Follower {
                 stopped: true,
                 inliers: 0,
                 from_detection: false,
+                from_learned: false,
             });
+        }
+        if let Some(sal) = learned {
+            let c = sal.crop();
+            if c.x as u64 + c.w as u64 > self.width as u64
+                || c.y as u64 + c.h as u64 > self.height as u64
+            {
+                return Err(FollowError::InvalidConfig {
+                    field: "learned",
+                    reason: "the learned map's crop lies outside the frame",
+                });
+            }
         }
         let cfg = &self.cfg;
 
@@ -436,6 +553,41 @@ impl Follower {
         let geo = (inliers as f64 / cfg.full_inliers as f64).min(1.0);
         let mut confidence = 0.5 * geo + 0.5 * agreement;
 
+        // The learned outline wins where it agrees with the followed one; where the follower
+        // has lost its object, it re-anchors on a learned region near the prediction.
+        let mut from_learned = false;
+        if let Some(sal) = learned {
+            let predicted = self.last.translated(
+                self.velocity.x.round() as i32,
+                self.velocity.y.round() as i32,
+            );
+            if let Some(region) = sal.mask(
+                &sal.crop().bbox(),
+                cfg.segment.threshold,
+                cfg.segment.keep_fraction,
+            ) {
+                let own = agreeing_parts(&region, &mask);
+                let iou = own.iou(&mask);
+                let trusted = !mask.is_empty() && confidence >= cfg.lost_confidence;
+                let kept = own.area() as f64 / mask.area().max(1) as f64;
+                if !own.is_empty() && iou >= cfg.learned_iou && kept >= 1.0 - cfg.learned_max_shrink
+                {
+                    mask = own;
+                    confidence = confidence.max(iou);
+                    from_learned = true;
+                } else if !trusted {
+                    let near = agreeing_parts(&region, &predicted);
+                    let iou = near.iou(&predicted);
+                    let ratio = near.area() as f64 / predicted.area().max(1) as f64;
+                    if !near.is_empty() && iou >= cfg.reanchor_iou && (0.5..=2.0).contains(&ratio) {
+                        mask = near;
+                        confidence = confidence.max(cfg.lost_confidence).max(iou);
+                        from_learned = true;
+                    }
+                }
+            }
+        }
+
         // Detections that agree win, within reach of the followed outline and where they do
         // not look like the background.
         let mut from_detection = false;
@@ -458,7 +610,7 @@ impl Follower {
 
         // What the next frame warps: the colour-refined outline only when configured, since
         // refinement errors compound when fed back (see `carry_refined`).
-        let carried = if from_detection || cfg.carry_refined {
+        let carried = if from_detection || from_learned || cfg.carry_refined {
             mask.clone()
         } else {
             warped
@@ -501,6 +653,7 @@ impl Follower {
             stopped: self.stopped,
             inliers,
             from_detection,
+            from_learned,
         })
     }
 
@@ -544,6 +697,46 @@ impl Follower {
             return None;
         }
         Some((fit.transform, fit.inliers.len()))
+    }
+}
+
+/// The connected parts of `region` that lie mostly on `mask` (over half of their own pixels,
+/// or over a tenth of the mask's): the learned object the followed outline is on, without the
+/// other salient things the crop holds.
+fn agreeing_parts(region: &Mask, mask: &Mask) -> Mask {
+    use crate::detect::components::{Components, Connectivity};
+    let mut comps = Components::new();
+    let Ok(blobs) = comps.label(
+        region.data(),
+        region.width(),
+        region.height(),
+        Connectivity::Eight,
+    ) else {
+        return Mask::empty();
+    };
+    let n = blobs.len();
+    let (w, h) = (region.width() as usize, region.height() as usize);
+    let mut bits = vec![0u8; w * h];
+    for i in 0..n {
+        let Some(part) = comps.mask(i) else { continue };
+        let part = part.translated(region.x(), region.y());
+        let on = part.intersection(mask) as f64;
+        if on > 0.5 * part.area() as f64 || on > 0.1 * mask.area() as f64 {
+            for r in comps.runs(i) {
+                let row = r.y as usize * w;
+                bits[row + r.x0 as usize..row + r.x1 as usize].fill(1);
+            }
+        }
+    }
+    match Mask::new(
+        region.x(),
+        region.y(),
+        region.width(),
+        region.height(),
+        bits,
+    ) {
+        Ok(m) if !m.is_empty() => m.tight(),
+        _ => Mask::empty(),
     }
 }
 
@@ -711,6 +904,7 @@ pub fn follow_sequence(
         stopped: false,
         inliers: 0,
         from_detection: false,
+        from_learned: false,
     });
     let no_dets: Vec<Detection> = Vec::new();
     let dets = |i: usize| detections.map_or(&no_dets[..], |d| &d[i][..]);
