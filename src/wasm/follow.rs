@@ -24,6 +24,8 @@ pub struct FollowStepJs {
     pub stopped: bool,
     /// A detection's mask was taken for this frame.
     pub from_detection: bool,
+    /// The learned segmentation's mask was taken for this frame.
+    pub from_learned: bool,
 }
 
 /// Follows one target from the mask given on a first frame. Feed it the frames in the
@@ -34,6 +36,8 @@ pub struct Follower {
     inner: CoreFollower,
     width: u32,
     height: u32,
+    /// The crop `learnedInput` prepared, which `stepLearned`'s output belongs to.
+    crop: Option<crate::segment::Crop>,
 }
 
 #[wasm_bindgen]
@@ -61,7 +65,49 @@ impl Follower {
             inner,
             width,
             height,
+            crop: None,
         })
+    }
+
+    /// The learned segmentation's input for the next frame (in `buf`): the crop around where
+    /// the target is expected, as a `Float32Array` for the network; `undefined` once stopped.
+    /// Run the network on it and hand the output to `stepLearned` with the same frame.
+    #[wasm_bindgen(js_name = learnedInput)]
+    pub fn learned_input(&mut self, buf: &FrameBuffer) -> Result<Option<Vec<f32>>, JsValue> {
+        let frame = buf.frame()?;
+        self.crop = None;
+        let Some(crop) = self.inner.learned_crop() else {
+            return Ok(None);
+        };
+        let mut out = vec![0f32; crate::segment::INPUT_LEN];
+        crate::segment::input_tensor(&frame, &crop, &mut out).map_err(js_error)?;
+        self.crop = Some(crop);
+        Ok(Some(out))
+    }
+
+    /// As `stepWith` (detections optional), with the network's output for the input
+    /// `learnedInput` gave for this frame.
+    #[wasm_bindgen(js_name = stepLearned)]
+    pub fn step_learned(
+        &mut self,
+        buf: &FrameBuffer,
+        output: &[f32],
+        detections: Option<Detections>,
+    ) -> Result<Ts<FollowStepJs>, JsValue> {
+        let crop = self.crop.take().ok_or_else(|| {
+            js_error(BindingError::Invalid(
+                "stepLearned needs the output for this frame's learnedInput".into(),
+            ))
+        })?;
+        let stretch = self.inner.config().segment.stretch;
+        let sal = crate::segment::Saliency::new(crop, output, stretch).map_err(js_error)?;
+        let dets = detections.map(|d| d.inner).unwrap_or_default();
+        let frame = buf.frame()?;
+        let s = self
+            .inner
+            .step_learned(&frame, &dets, Some(&sal))
+            .map_err(js_error)?;
+        self.report(s)
     }
 
     /// Follows the target into the frame in `buf` (the next one in the direction of travel),
@@ -94,7 +140,12 @@ impl Follower {
         dets: &[crate::frame::Detection],
     ) -> Result<Ts<FollowStepJs>, JsValue> {
         let frame = buf.frame()?;
+        self.crop = None;
         let s = self.inner.step(&frame, dets).map_err(js_error)?;
+        self.report(s)
+    }
+
+    fn report(&self, s: crate::follow::FollowStep) -> Result<Ts<FollowStepJs>, JsValue> {
         let has = !s.stopped && !s.mask.is_empty();
         let rle = has.then(|| Rle::from_mask(&s.mask, self.width, self.height));
         ts(&FollowStepJs {
@@ -104,6 +155,7 @@ impl Follower {
             lost: s.lost,
             stopped: s.stopped,
             from_detection: s.from_detection,
+            from_learned: s.from_learned,
         })
     }
 }

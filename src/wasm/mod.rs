@@ -25,6 +25,7 @@ mod eval;
 mod follow;
 mod frame;
 mod offline;
+mod segment;
 mod settings;
 mod synth;
 mod tracker;
@@ -35,9 +36,10 @@ pub use eval::*;
 pub use follow::*;
 pub use frame::*;
 pub use offline::*;
+pub use segment::*;
 pub use settings::{
     BackgroundSettings, EvalSettings, FollowSettings, MovingSettings, OfflineSettings,
-    RefineSettings, TrackerSettings,
+    RefineSettings, SegmentSettings, TrackerSettings,
 };
 pub use synth::*;
 pub use tracker::*;

@@ -8,6 +8,7 @@ use crate::detect::background::BackgroundConfig;
 use crate::detect::{MovingConfig, RefineConfig};
 use crate::eval::EvalConfig;
 use crate::follow::FollowConfig;
+use crate::segment::SegmentConfig;
 use crate::track::offline::OfflineConfig;
 use crate::track::{Config as TrackConfig, Preset};
 use serde::de::DeserializeOwned;
@@ -41,6 +42,8 @@ export type MovingSettings = DeepPartial<MovingConfig>;
 export type RefineSettings = DeepPartial<RefineConfig>;
 /** The follower's settings over `FollowConfig`'s defaults. */
 export type FollowSettings = DeepPartial<FollowConfig>;
+/** The learned segmentation's settings over `SegmentConfig`'s defaults. */
+export type SegmentSettings = DeepPartial<SegmentConfig>;
 /** How `evaluate` scores, over its defaults: box IoU at 0.5, every record as given
  * (`preprocessing: "none"`; `"mot15"`, `"mot17"`, `"mot20"` or `{ mots: { class } }` apply
  * TrackEval's benchmark rules). */
@@ -70,6 +73,9 @@ extern "C" {
     /// The evaluation's settings (`EvalSettings`).
     #[wasm_bindgen(typescript_type = "EvalSettings")]
     pub type EvalSettings;
+    /// The learned segmentation's settings (`SegmentSettings`).
+    #[wasm_bindgen(typescript_type = "SegmentSettings")]
+    pub type SegmentSettings;
 }
 
 /// A settings object as a JSON value, after [`check_settings_value`] (depth, size, finite
@@ -208,6 +214,13 @@ pub(super) fn refine_config(v: Option<&RefineSettings>) -> Result<RefineConfig, 
 /// The follower's config from its settings object.
 pub(super) fn follow_config(v: Option<&FollowSettings>) -> Result<FollowConfig, JsValue> {
     overlay(FollowConfig::default(), v.map(|v| v.as_ref()))
+}
+
+/// The learned segmentation's config from its settings object.
+pub(super) fn segment_config(v: Option<&SegmentSettings>) -> Result<SegmentConfig, JsValue> {
+    let c = overlay(SegmentConfig::default(), v.map(|v| v.as_ref()))?;
+    c.validate().map_err(js_error)?;
+    Ok(c)
 }
 
 /// The evaluation's config from its settings object, over [`EvalConfig::unfiltered`].
