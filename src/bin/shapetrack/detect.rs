@@ -1,9 +1,17 @@
 //! `shapetrack detect`: runs a detector over a folder of frames and writes MOTS txt.
 //!
 //! ```text
-//! shapetrack detect --frames DIR [--detector auto|background|moving|refine] [--boxes BOXES.txt]
-//!                   --out MASKS.txt
+//! shapetrack detect --frames DIR [--detector auto|refine|background|moving|auto-motion|refine-colour]
+//!                   [--boxes BOXES.txt] [--model PATH|none] --out MASKS.txt
 //! ```
+//!
+//! `auto` and `refine` are the best available: with the learned segmentation's model
+//! installed (`npm ci`; see `shapetrack::segment`), every mask comes from it — `refine`
+//! segments each box, `auto` each moving blob and each salient region of the whole frame (so
+//! objects that stand still are found too). `--model none` (or the detector values
+//! `auto-motion` and `refine-colour`) keeps the weights-free path: motion blobs and the
+//! GrabCut-like colour refinement. Without the model and without `--model`, `auto` and
+//! `refine` warn and take the weights-free path.
 //!
 //! Frames are the folder's `.jpg`/`.jpeg`/`.png` files in name order, numbered from 1. Each
 //! detection becomes one line `frame id class height width rle` with id `-1` (detections carry
@@ -18,6 +26,7 @@ use shapetrack::detect::{
 };
 use shapetrack::io::motchallenge::{parse_mot, write_mots};
 use shapetrack::io::{image_files, read_rgb, read_text, write_text, IoError, Record, Rle};
+use shapetrack::segment::{Job, Net, SegmentConfig, TractNet, WholeFrame};
 use shapetrack::{Detection, Frame};
 use std::path::{Path, PathBuf};
 
@@ -25,14 +34,33 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Kind {
     /// `refine` when boxes are given; otherwise `background` or `moving`, chosen from how much
-    /// the camera moves over the first frames.
+    /// the camera moves over the first frames, then (with the model) each blob and each
+    /// salient region of the whole frame segmented by the learned model.
     Auto,
     /// The thesis' adaptive background subtractor (static camera).
     Background,
     /// Camera-motion-compensated background subtraction with box refinement (moving camera).
     Moving,
-    /// Refines the `--boxes` into masks (GrabCut-like colour + edge segmentation).
+    /// Refines the `--boxes` into masks: the learned model (when installed), the colour
+    /// refinement for a box it finds nothing in.
     Refine,
+    /// `auto` without the learned model: motion blobs only.
+    AutoMotion,
+    /// `refine` without the learned model: GrabCut-like colour + edge segmentation.
+    RefineColour,
+}
+
+impl Kind {
+    /// The weights-free kind this one falls back to, and whether it would use the model.
+    pub fn plain(self) -> (Kind, bool) {
+        match self {
+            Kind::Auto => (Kind::Auto, true),
+            Kind::Refine => (Kind::Refine, true),
+            Kind::AutoMotion => (Kind::Auto, false),
+            Kind::RefineColour => (Kind::Refine, false),
+            k => (k, false),
+        }
+    }
 }
 
 /// Arguments of `shapetrack detect`.
@@ -50,10 +78,68 @@ pub struct Args {
     /// MOTS txt output (frame id class height width rle).
     #[arg(long)]
     out: PathBuf,
+    /// The learned segmentation's model file (u2netp.onnx; found in the checkout's
+    /// node_modules when absent), or `none` for the weights-free path.
+    #[arg(long)]
+    model: Option<String>,
+    /// Learned segmentation settings as JSON over the defaults (e.g. `{"margin": 0.5}`).
+    #[arg(long)]
+    segment: Option<String>,
+}
+
+/// How `--model` was given.
+pub enum ModelChoice {
+    /// Not given: the checkout's model if installed, else the weights-free path with a warning.
+    Default,
+    /// `--model none`.
+    Off,
+    /// `--model PATH`: that file or an error.
+    Path(PathBuf),
+}
+
+impl ModelChoice {
+    /// From the flag's value.
+    pub fn from_flag(v: Option<&str>) -> ModelChoice {
+        match v {
+            None => ModelChoice::Default,
+            Some("none") => ModelChoice::Off,
+            Some(p) => ModelChoice::Path(PathBuf::from(p)),
+        }
+    }
+
+    /// The network, or `None` for the weights-free path (`what` names the command in the
+    /// warning printed when the model is missing).
+    pub fn load(&self, what: &str) -> Result<Option<TractNet>, Box<dyn std::error::Error>> {
+        match self {
+            ModelChoice::Off => Ok(None),
+            ModelChoice::Path(p) => Ok(Some(TractNet::load(Some(p))?)),
+            ModelChoice::Default => match TractNet::load(None) {
+                Ok(n) => Ok(Some(n)),
+                Err(e) => {
+                    eprintln!("{what}: warning: {e}\n{what}: using the weights-free path");
+                    Ok(None)
+                }
+            },
+        }
+    }
+}
+
+/// The learned stage of a detector: the network and its settings.
+pub struct Learned {
+    /// The network.
+    pub net: Box<dyn Net>,
+    /// Its settings.
+    pub cfg: SegmentConfig,
+    /// Whole-frame pass of the automatic detector (boxes never get one).
+    pub whole: WholeFrame,
 }
 
 /// Frames the auto choice watches before deciding between a static and a moving camera.
 pub const JUDGE_FRAMES: usize = 5;
+
+/// The automatic detector's whole-frame pass with the learned model (chosen on the 21 DAVIS
+/// clips, `tests/data/detect/README.md`).
+pub const AUTO_WHOLE_FRAME: WholeFrame = WholeFrame::Proposals;
 
 /// Errors of the detect command that are not I/O or detector errors.
 #[derive(Debug, thiserror::Error)]
@@ -112,6 +198,8 @@ pub enum Runner {
     Moving(Box<MovingCameraDetector>),
     /// Box refinement; the boxes of every frame, index = frame number.
     Refine(BoxRefiner, Vec<Vec<Detection>>),
+    /// A weights-free detector whose detections (or boxes) the learned model segments.
+    Learned(Box<Runner>, Box<Learned>),
 }
 
 impl Runner {
@@ -122,15 +210,18 @@ impl Runner {
     ) -> Result<Runner, Box<dyn std::error::Error>> {
         let bg = || BackgroundSubtractor::new(BackgroundConfig::default()).map(Box::new);
         let mv = || MovingCameraDetector::new(MovingConfig::default()).map(Box::new);
+        let kind = kind.plain().0;
         Ok(match (kind, boxes) {
-            (Kind::Refine | Kind::Auto, Some(b)) => {
+            (Kind::Refine | Kind::Auto | Kind::RefineColour | Kind::AutoMotion, Some(b)) => {
                 Runner::Refine(BoxRefiner::new(RefineConfig::default())?, b)
             }
-            (Kind::Refine, None) => return Err(DetectCliError::RefineWithoutBoxes.into()),
+            (Kind::Refine | Kind::RefineColour, None) => {
+                return Err(DetectCliError::RefineWithoutBoxes.into())
+            }
             (_, Some(_)) => return Err(DetectCliError::BoxesNotUsed.into()),
             (Kind::Background, None) => Runner::Background(bg()?),
             (Kind::Moving, None) => Runner::Moving(mv()?),
-            (Kind::Auto, None) => Runner::Judging {
+            (Kind::Auto | Kind::AutoMotion, None) => Runner::Judging {
                 judge: CameraJudge::new(),
                 background: bg()?,
                 moving: mv()?,
@@ -138,19 +229,58 @@ impl Runner {
         })
     }
 
-    /// The name of the detector running now (auto says what it chose once it has).
-    pub fn name(&self) -> &'static str {
+    /// `self` with the learned stage on top.
+    pub fn learned(self, learned: Learned) -> Runner {
+        Runner::Learned(Box::new(self), Box::new(learned))
+    }
+
+    /// Lets the detector learn from frame `n` without asking for its detections (the learned
+    /// stage does not run): an evaluation that scores every Nth frame keeps a background
+    /// model as current as a full run would.
+    pub fn observe(&mut self, n: u32, frame: &Frame) -> Result<(), DetectError> {
         match self {
-            Runner::Judging { .. } => "auto (judging the camera)",
-            Runner::Background(_) => "background",
-            Runner::Moving(_) => "moving",
-            Runner::Refine(..) => "refine",
+            Runner::Learned(base, _) => base.observe(n, frame),
+            Runner::Refine(..) => Ok(()),
+            _ => self.detect(n, frame).map(|_| ()),
+        }
+    }
+
+    /// The name of the detector running now (auto says what it chose once it has).
+    pub fn name(&self) -> String {
+        match self {
+            Runner::Judging { .. } => "auto (judging the camera)".into(),
+            Runner::Background(_) => "background".into(),
+            Runner::Moving(_) => "moving".into(),
+            Runner::Refine(..) => "refine".into(),
+            Runner::Learned(base, _) => format!("{} + learned segmentation", base.name()),
         }
     }
 
     /// The detections of frame `n` (1-based).
     pub fn detect(&mut self, n: u32, frame: &Frame) -> Result<Vec<Detection>, DetectError> {
         match self {
+            Runner::Learned(base, learned) => {
+                let Learned { net, cfg, whole } = &mut **learned;
+                let seg = |e: shapetrack::segment::SegmentError| DetectError::Refine {
+                    reason: format!("learned segmentation: {e}"),
+                };
+                if let Runner::Refine(r, boxes) = &mut **base {
+                    // Boxes: the model first; the colour refinement for those it finds
+                    // nothing in (they are still box-only).
+                    let b = boxes.get(n as usize).cloned().unwrap_or_default();
+                    let mut job = Job::new(frame.width(), frame.height(), b, WholeFrame::Off, cfg)
+                        .map_err(seg)?;
+                    job.run(frame, net.as_mut()).map_err(seg)?;
+                    let mut dets = job.finish().detections;
+                    r.refine_all(frame, &mut dets, None)?;
+                    return Ok(dets);
+                }
+                let dets = base.detect(n, frame)?;
+                let mut job =
+                    Job::new(frame.width(), frame.height(), dets, *whole, cfg).map_err(seg)?;
+                job.run(frame, net.as_mut()).map_err(seg)?;
+                Ok(job.finish().detections)
+            }
             Runner::Background(d) => d.detect(frame),
             Runner::Moving(d) => d.detect(frame),
             Runner::Refine(r, boxes) => {
@@ -237,7 +367,21 @@ pub fn run(args: Args) -> crate::CliResult {
         .as_deref()
         .map(|p| read_boxes(p, files.len()))
         .transpose()?;
-    let mut runner = Runner::new(args.detector, boxes)?;
+    let (kind, wants_model) = args.detector.plain();
+    let mut runner = Runner::new(kind, boxes)?;
+    if wants_model {
+        if let Some(net) = ModelChoice::from_flag(args.model.as_deref()).load("detect")? {
+            let cfg: SegmentConfig = match &args.segment {
+                Some(j) => serde_json::from_str(j)?,
+                None => SegmentConfig::default(),
+            };
+            runner = runner.learned(Learned {
+                net: Box::new(net),
+                cfg,
+                whole: AUTO_WHOLE_FRAME,
+            });
+        }
+    }
     let mut out = Vec::new();
     let mut first: Option<(u32, u32)> = None;
     for (i, path) in files.iter().enumerate() {

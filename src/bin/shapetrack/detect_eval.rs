@@ -10,8 +10,15 @@
 //! mask (0 where there is none); frames whose ground truth is empty are left out. Columns:
 //!
 //! - `box`: the filled ground-truth bounding box (the oracle box) as the mask;
-//! - `refine`: [`refine_box`] from that oracle box;
-//! - `background`, `moving`, `auto`: the detectors of `shapetrack detect`, no oracle.
+//! - `refine`: that oracle box segmented by the learned model (the colour refinement where it
+//!   finds nothing), as `shapetrack detect --detector refine`;
+//! - `refine-colour`: [`refine_box`] from the oracle box (no model);
+//! - `background`, `moving`, `auto`, `auto-motion`: the detectors of `shapetrack detect`, no
+//!   oracle (`auto` with the learned model, `auto-motion` without);
+//! - `whole`: the learned model's salient regions of the whole frame alone.
+//!
+//! `--step N` scores every Nth frame only (detectors still see every frame); `--net-cache DIR`
+//! keeps the network's outputs so a grid over the settings after the network re-runs fast.
 //!
 //! J rewards the best mask of a frame and ignores the others, so a detector that sprays masks
 //! loses nothing by it: the row under each table's mean counts the masks per frame that lie
@@ -21,10 +28,12 @@
 //!
 //! Speed: frames per second of each detector's own work (decoding excluded), one thread.
 
-use crate::detect::{Kind, Runner};
+use crate::detect::{Kind, Learned, ModelChoice, Runner, AUTO_WHOLE_FRAME};
+use crate::netcache::{CachedNet, SharedNet};
 use shapetrack::detect::{refine_box, MovingCameraDetector, MovingConfig, RefineConfig};
 use shapetrack::io::{image_files, read_rgb, IoError};
-use shapetrack::{Frame, Mask};
+use shapetrack::segment::{Job, SegmentConfig, WholeFrame};
+use shapetrack::{Detection, Frame, Mask};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -33,14 +42,20 @@ use std::time::Instant;
 pub enum Method {
     /// Filled oracle box.
     Box,
-    /// Refinement of the oracle box.
+    /// The learned model on the oracle box.
     Refine,
+    /// Colour refinement of the oracle box (no model).
+    RefineColour,
     /// Static-camera background subtraction.
     Background,
     /// Camera-motion-compensated background subtraction + refinement.
     Moving,
-    /// The `auto` choice without boxes.
+    /// The `auto` choice without boxes, with the learned model.
     Auto,
+    /// The `auto` choice without the model.
+    AutoMotion,
+    /// The model's salient regions of the whole frame alone.
+    Whole,
 }
 
 /// Arguments of `shapetrack detect-eval`.
@@ -69,15 +84,33 @@ pub struct Args {
     /// Only these sequences (comma-separated names); all when absent.
     #[arg(long, value_delimiter = ',')]
     sequences: Vec<String>,
+    /// Learned segmentation settings as JSON over the defaults (e.g. `{"margin": 0.5}`).
+    #[arg(long)]
+    segment: Option<String>,
+    /// The model file, or `none` (the learned columns then fail).
+    #[arg(long)]
+    model: Option<String>,
+    /// Folder keeping the network's outputs between runs (evaluation only).
+    #[arg(long)]
+    net_cache: Option<PathBuf>,
+    /// Score every Nth frame (1: all).
+    #[arg(long, default_value_t = 1)]
+    step: usize,
+    /// Also write per-frame IoUs as JSON lines (sequence, method, frame, iou) to this file.
+    #[arg(long)]
+    frames_out: Option<PathBuf>,
 }
 
 fn name(m: Method) -> &'static str {
     match m {
         Method::Box => "box (oracle)",
         Method::Refine => "refine (oracle box)",
+        Method::RefineColour => "refine-colour (oracle box)",
         Method::Background => "background",
         Method::Moving => "moving",
         Method::Auto => "auto",
+        Method::AutoMotion => "auto-motion",
+        Method::Whole => "whole frame (model)",
     }
 }
 
@@ -154,39 +187,115 @@ struct Score {
 /// Share of a mask's pixels on the ground truth under which it counts as off the object.
 const OFF_OBJECT: f64 = 0.1;
 
-/// J of one method on one sequence, its time and its off-object masks.
+/// What every score needs beside the sequence.
+struct Ctx {
+    refine: RefineConfig,
+    moving: MovingConfig,
+    seg: SegmentConfig,
+    net: Option<SharedNet>,
+    step: usize,
+}
+
+impl Ctx {
+    fn net(&self) -> Result<SharedNet, Box<dyn std::error::Error>> {
+        self.net.clone().ok_or_else(|| {
+            "this method needs the learned model (installed by `npm ci`; --model PATH)".into()
+        })
+    }
+
+    fn learned(&self, whole: WholeFrame) -> Result<Learned, Box<dyn std::error::Error>> {
+        Ok(Learned {
+            net: Box::new(self.net()?),
+            cfg: self.seg.clone(),
+            whole,
+        })
+    }
+}
+
+/// J of one method on one sequence, its time and its off-object masks; `frames` collects
+/// each scored frame's IoU.
 fn score(
     seq: &Seq,
     m: Method,
-    refine: &RefineConfig,
-    moving: &MovingConfig,
+    ctx: &Ctx,
+    frames: &mut Vec<(usize, f64)>,
 ) -> Result<Score, Box<dyn std::error::Error>> {
     let mut runner = match m {
         Method::Background => Some(Runner::new(Kind::Background, None)?),
         Method::Moving => Some(Runner::Moving(Box::new(MovingCameraDetector::new(
-            moving.clone(),
+            ctx.moving.clone(),
         )?))),
-        Method::Auto => Some(Runner::new(Kind::Auto, None)?),
+        Method::AutoMotion => Some(Runner::new(Kind::Auto, None)?),
+        Method::Auto => {
+            Some(Runner::new(Kind::Auto, None)?.learned(ctx.learned(AUTO_WHOLE_FRAME)?))
+        }
+        _ => None,
+    };
+    let mut net = match m {
+        Method::Refine | Method::Whole => Some(ctx.net()?),
         _ => None,
     };
     let (mut sum, mut n, mut secs, mut off) = (0.0, 0usize, 0.0, 0usize);
     for (i, (img, gt)) in seq.frames.iter().zip(&seq.gt).enumerate() {
+        let scored = i % ctx.step.max(1) == 0;
+        // Detectors that learn from every frame see every frame; the others only the scored.
+        if !scored && runner.is_none() {
+            continue;
+        }
         let (w, h) = img.dimensions();
         let frame = Frame::rgb(img.as_raw(), w, h)?;
+        if !scored {
+            if let Some(r) = runner.as_mut() {
+                r.observe(i as u32 + 1, &frame)?;
+            }
+            continue;
+        }
         let t = Instant::now();
-        let masks: Vec<Mask> = match (m, runner.as_mut()) {
-            (Method::Box, _) => vec![Mask::from_bbox(&gt.bbox())],
-            (Method::Refine, _) => refine_box(&frame, &gt.bbox(), refine)?
+        let masks: Vec<Mask> = match (m, runner.as_mut(), net.as_mut()) {
+            (Method::Box, _, _) => vec![Mask::from_bbox(&gt.bbox())],
+            (Method::RefineColour, _, _) => refine_box(&frame, &gt.bbox(), &ctx.refine)?
                 .into_iter()
                 .collect(),
-            (_, Some(r)) => r
+            (Method::Refine, _, Some(net)) => {
+                if gt.is_empty() {
+                    Vec::new()
+                } else {
+                    let d = Detection::from_box(gt.bbox(), 1.0);
+                    let mut job = Job::new(w, h, vec![d], WholeFrame::Off, &ctx.seg)?;
+                    job.run(&frame, net)?;
+                    let out = job.finish();
+                    match out.detections.into_iter().next().and_then(|d| d.mask) {
+                        Some(m) => vec![m],
+                        None => refine_box(&frame, &gt.bbox(), &ctx.refine)?
+                            .into_iter()
+                            .collect(),
+                    }
+                }
+            }
+            (Method::Whole, _, Some(net)) => {
+                let cfg = SegmentConfig {
+                    max_crops: 0,
+                    ..ctx.seg.clone()
+                };
+                let mut job = Job::new(w, h, Vec::new(), WholeFrame::Masks, &cfg)?;
+                job.run(&frame, net)?;
+                job.finish()
+                    .detections
+                    .into_iter()
+                    .filter_map(|d| d.mask)
+                    .collect()
+            }
+            (_, Some(r), _) => r
                 .detect(i as u32 + 1, &frame)?
                 .into_iter()
                 .filter_map(|d| d.mask)
                 .collect(),
-            (_, None) => Vec::new(),
+            _ => Vec::new(),
         };
         secs += t.elapsed().as_secs_f64();
+        if !scored {
+            continue;
+        }
         off += masks
             .iter()
             .filter(|d| (d.intersection(gt) as f64) < OFF_OBJECT * d.area() as f64)
@@ -195,6 +304,7 @@ fn score(
             continue;
         }
         let best = masks.iter().map(|d| d.iou(gt)).fold(0.0, f64::max);
+        frames.push((i, best));
         sum += best;
         n += 1;
     }
@@ -202,7 +312,7 @@ fn score(
     Ok(Score {
         j: sum / n.max(1) as f64,
         secs,
-        off: off as f64 / seq.frames.len().max(1) as f64,
+        off: off as f64 / seq.frames.len().div_ceil(ctx.step.max(1)).max(1) as f64,
         chose,
     })
 }
@@ -216,6 +326,32 @@ pub fn run(args: Args) -> crate::CliResult {
         Some(j) => serde_json::from_str(j)?,
         None => MovingConfig::default(),
     };
+    let seg: SegmentConfig = match &args.segment {
+        Some(j) => serde_json::from_str(j)?,
+        None => SegmentConfig::default(),
+    };
+    let uses_model = args
+        .methods
+        .iter()
+        .any(|m| matches!(m, Method::Refine | Method::Auto | Method::Whole));
+    let net = if uses_model {
+        match ModelChoice::from_flag(args.model.as_deref()).load("detect-eval")? {
+            Some(n) => Some(SharedNet(std::rc::Rc::new(std::cell::RefCell::new(
+                CachedNet::new(Box::new(n), args.net_cache.clone())?,
+            )))),
+            None => None,
+        }
+    } else {
+        None
+    };
+    let ctx = Ctx {
+        refine,
+        moving,
+        seg,
+        net,
+        step: args.step,
+    };
+    let mut frames_out = String::new();
     let header: Vec<&str> = args.methods.iter().map(|&m| name(m)).collect();
     let mut all_fps: Vec<(f64, usize)> = vec![(0.0, 0); args.methods.len()];
     for root in &args.davis {
@@ -229,7 +365,15 @@ pub fn run(args: Args) -> crate::CliResult {
             let seq = load(root, &dir)?;
             let mut cells = Vec::new();
             for (k, &m) in args.methods.iter().enumerate() {
-                let sc = score(&seq, m, &refine, &moving)?;
+                let mut per_frame = Vec::new();
+                let sc = score(&seq, m, &ctx, &mut per_frame)?;
+                for (f, iou) in per_frame {
+                    frames_out.push_str(&format!(
+                        "{{\"sequence\":\"{}\",\"method\":\"{}\",\"frame\":{f},\"iou\":{iou:.6}}}\n",
+                        seq.name,
+                        name(m)
+                    ));
+                }
                 means[k] += sc.j;
                 offs[k] += sc.off;
                 all_fps[k].0 += sc.secs;
@@ -267,5 +411,15 @@ pub fn run(args: Args) -> crate::CliResult {
     println!("| | {} |", header.join(" | "));
     println!("|---|{}", "---|".repeat(header.len()));
     println!("| fps | {} |", cells.join(" | "));
+    if let Some(net) = &ctx.net {
+        let n = net.0.borrow();
+        println!(
+            "\nnetwork runs: {} (cached outputs used: {})",
+            n.misses, n.hits
+        );
+    }
+    if let Some(p) = &args.frames_out {
+        shapetrack::io::write_text(p, &frames_out)?;
+    }
     Ok(())
 }

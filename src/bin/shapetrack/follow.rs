@@ -6,7 +6,8 @@
 //! Frames are decoded one at a time in the direction of travel, so memory stays flat over a
 //! long folder for `follow` (`vot` keeps a sequence's frames, since its runs restart often).
 
-use crate::detect::{Kind, Runner};
+use crate::detect::{Kind, ModelChoice, Runner};
+use crate::netcache::{CachedNet, SharedNet};
 use image::RgbImage;
 use shapetrack::eval::vot::{anchors_every, run_anchor_protocol, run_reset_protocol};
 use shapetrack::eval::vot::{overlap, OverlapMethod, ResetParams};
@@ -21,6 +22,7 @@ use shapetrack::io::vot::{parse_anchor_values, read_regions, write_regions, Dire
 use shapetrack::io::{image_files, read_rgb, write_text, Record};
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 /// Detections used while following.
@@ -67,6 +69,28 @@ pub struct Args {
     /// Print each frame's confidence, lost flag, inliers (and IoU with --gt).
     #[arg(long)]
     verbose: bool,
+    /// The learned segmentation's model file (u2netp.onnx; found in the checkout's
+    /// node_modules when absent), or `none` for the follower without it.
+    #[arg(long)]
+    model: Option<String>,
+    /// Folder keeping the network's outputs between runs (evaluation only).
+    #[arg(long)]
+    net_cache: Option<PathBuf>,
+}
+
+/// The learned model for the follower, shared by its runs (`None`: weights-free).
+fn shared_net(
+    model: Option<&str>,
+    cache: Option<PathBuf>,
+    what: &str,
+) -> Result<Option<SharedNet>, Box<dyn std::error::Error>> {
+    Ok(match ModelChoice::from_flag(model).load(what)? {
+        Some(n) => Some(SharedNet(Rc::new(RefCell::new(CachedNet::new(
+            Box::new(n),
+            cache,
+        )?)))),
+        None => None,
+    })
 }
 
 fn frame_of(img: &RgbImage) -> Result<Frame<'_>, Box<dyn std::error::Error>> {
@@ -105,6 +129,7 @@ pub enum Method {
 struct Travel {
     follower: Follower,
     detector: Option<Runner>,
+    net: Option<SharedNet>,
 }
 
 impl Travel {
@@ -113,6 +138,7 @@ impl Travel {
         mask: &Mask,
         kind: DetectorKind,
         cfg: &FollowConfig,
+        net: Option<SharedNet>,
     ) -> Result<Travel, Box<dyn std::error::Error>> {
         let follower = Follower::new(frame, mask, cfg.clone())?;
         let detector = match kind {
@@ -123,7 +149,11 @@ impl Travel {
                 Some(d)
             }
         };
-        Ok(Travel { follower, detector })
+        Ok(Travel {
+            follower,
+            detector,
+            net,
+        })
     }
 
     fn step(
@@ -137,7 +167,10 @@ impl Travel {
             Some(d) => d.detect(0, frame)?,
             None => Vec::new(),
         };
-        let s = self.follower.step(frame, &dets)?;
+        let s = match &mut self.net {
+            Some(net) => self.follower.step_with_net(frame, &dets, net)?,
+            None => self.follower.step(frame, &dets)?,
+        };
         *busy += t.elapsed();
         Ok(s)
     }
@@ -166,6 +199,7 @@ pub fn run(args: Args) -> crate::CliResult {
         None => FollowConfig::default(),
     };
     cfg.validate()?;
+    let net = shared_net(args.model.as_deref(), args.net_cache.clone(), "follow")?;
 
     let mut steps: Vec<Option<FollowStep>> = vec![None; files.len()];
     steps[init] = Some(FollowStep {
@@ -175,12 +209,13 @@ pub fn run(args: Args) -> crate::CliResult {
         stopped: false,
         inliers: 0,
         from_detection: false,
+        from_learned: false,
     });
     let mut busy = Duration::ZERO;
     let forward: Vec<usize> = (init + 1..files.len()).collect();
     let backward: Vec<usize> = (0..init).rev().collect();
     for order in [forward, backward] {
-        let mut travel = Travel::new(&frame0, &mask, args.detector, &cfg)?;
+        let mut travel = Travel::new(&frame0, &mask, args.detector, &cfg, net.clone())?;
         for i in order {
             if args.method == Method::Copy {
                 steps[i] = steps[init].clone();
@@ -320,6 +355,12 @@ pub struct VotArgs {
     /// Sequence name in the file names (default: the folder's name).
     #[arg(long)]
     sequence: Option<String>,
+    /// The learned segmentation's model file, or `none` for the follower without it.
+    #[arg(long)]
+    model: Option<String>,
+    /// Folder keeping the network's outputs between runs (evaluation only).
+    #[arg(long)]
+    net_cache: Option<PathBuf>,
 }
 
 fn region_mask(r: &Region, w: u32, h: u32) -> Mask {
@@ -331,17 +372,28 @@ fn region_mask(r: &Region, w: u32, h: u32) -> Mask {
     }
 }
 
-/// Follows from `start` through `order`, one region per frame; stops early once the follower
-/// stops (`until_stop`) or fills the rest with empty masks.
+/// What every run of one VOT sequence shares: its frames, its ground truth and frame size
+/// (the reset protocol's supervisor) and the learned segmentation's network.
+struct VotSeq<'a> {
+    imgs: &'a [RgbImage],
+    gt: &'a [Region],
+    size: (u32, u32),
+    net: Option<&'a SharedNet>,
+}
+
+/// Follows from `start` through `order`, one region per frame. Under the reset protocol
+/// (`until_stop`) it stops early once the follower stops or loses all overlap with the
+/// ground truth; otherwise it fills the rest with empty masks.
 fn follow_run(
-    imgs: &[RgbImage],
+    seq: &VotSeq<'_>,
     start: usize,
     init: &Region,
     order: impl Iterator<Item = usize>,
     until_stop: bool,
-    supervisor: Option<(&[Region], (u32, u32))>,
     stats: &mut (Duration, usize),
 ) -> Result<Vec<Region>, Box<dyn std::error::Error>> {
+    let (imgs, net) = (seq.imgs, seq.net);
+    let supervisor = until_stop.then_some((seq.gt, seq.size));
     let (w, h) = imgs[start].dimensions();
     let mask = region_mask(init, w, h);
     let mut out = Vec::new();
@@ -359,7 +411,11 @@ fn follow_run(
             continue;
         }
         let t = Instant::now();
-        let s = f.step(&frame_of(&imgs[i])?, &[])?;
+        let frame = frame_of(&imgs[i])?;
+        let s = match net {
+            Some(n) => f.step_with_net(&frame, &[], &mut n.clone())?,
+            None => f.step(&frame, &[])?,
+        };
         stats.0 += t.elapsed();
         stats.1 += 1;
         let r = Region::Mask(s.mask);
@@ -404,23 +460,23 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
             .unwrap_or_else(|| "sequence".into())
     });
     std::fs::create_dir_all(&args.out)?;
+    let net = shared_net(args.model.as_deref(), args.net_cache.clone(), "vot")?;
     let n = imgs.len();
     let stats = RefCell::new((Duration::ZERO, 0usize));
     let err: RefCell<Option<String>> = RefCell::new(None);
+    let vot_seq = VotSeq {
+        imgs: &imgs,
+        gt: &gt,
+        size: (w, h),
+        net: net.as_ref(),
+    };
     let run = |start: usize, init: &Region, order: Box<dyn Iterator<Item = usize>>, stop| {
-        follow_run(
-            &imgs,
-            start,
-            init,
-            order,
-            stop,
-            stop.then_some((&gt[..], (w, h))),
-            &mut stats.borrow_mut(),
+        follow_run(&vot_seq, start, init, order, stop, &mut stats.borrow_mut()).unwrap_or_else(
+            |e| {
+                err.borrow_mut().get_or_insert(e.to_string());
+                Vec::new()
+            },
         )
-        .unwrap_or_else(|e| {
-            err.borrow_mut().get_or_insert(e.to_string());
-            Vec::new()
-        })
     };
     if matches!(args.protocol, VotProtocol::Anchor | VotProtocol::Both) {
         let af = args.seq.join("anchor.value");

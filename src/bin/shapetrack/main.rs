@@ -14,6 +14,7 @@ mod follow;
 // but `wasm-pack test` builds every target for wasm32, so the rest compiles there too.
 #[cfg(not(target_arch = "wasm32"))]
 mod grid;
+mod netcache;
 mod synth;
 mod track;
 

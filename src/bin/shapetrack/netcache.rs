@@ -1,0 +1,93 @@
+//! A cache of the learned segmentation's outputs for evaluation runs (`detect-eval`,
+//! `follow --net-cache`): a grid of settings that changes only what happens after the network
+//! (thresholds, fusion rules) re-runs in seconds instead of hours. Outputs are keyed by a hash
+//! of the input tensor's bits, so a cached output is the one the network gave for exactly
+//! that input. Never used by `detect` or `follow` themselves unless asked.
+
+use shapetrack::segment::{Net, SegmentError, OUTPUT_LEN};
+use std::collections::hash_map::DefaultHasher;
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+
+/// A [`Net`] that remembers its outputs, in memory and optionally in a folder.
+pub struct CachedNet {
+    inner: Box<dyn Net>,
+    dir: Option<PathBuf>,
+    memory: HashMap<u64, Vec<f32>>,
+    /// Runs of the real network.
+    pub misses: u64,
+    /// Outputs served from the cache.
+    pub hits: u64,
+}
+
+impl CachedNet {
+    /// Wraps `inner`; `dir` (created when missing) keeps outputs between runs.
+    pub fn new(inner: Box<dyn Net>, dir: Option<PathBuf>) -> std::io::Result<CachedNet> {
+        if let Some(d) = &dir {
+            std::fs::create_dir_all(d)?;
+        }
+        Ok(CachedNet {
+            inner,
+            dir,
+            memory: HashMap::new(),
+            misses: 0,
+            hits: 0,
+        })
+    }
+}
+
+fn key(input: &[f32]) -> u64 {
+    let mut h = DefaultHasher::new();
+    for v in input {
+        v.to_bits().hash(&mut h);
+    }
+    input.len().hash(&mut h);
+    h.finish()
+}
+
+impl Net for CachedNet {
+    fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
+        let k = key(input);
+        if let Some(v) = self.memory.get(&k) {
+            self.hits += 1;
+            return Ok(v.clone());
+        }
+        let file = self.dir.as_ref().map(|d| d.join(format!("{k:016x}.f32")));
+        if let Some(bytes) = file.as_ref().and_then(|f| std::fs::read(f).ok()) {
+            if bytes.len() == OUTPUT_LEN * 4 {
+                let v: Vec<f32> = bytes
+                    .chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect();
+                self.hits += 1;
+                self.memory.insert(k, v.clone());
+                return Ok(v);
+            }
+        }
+        let v = self.inner.run(input)?;
+        self.misses += 1;
+        if let Some(f) = file {
+            let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+            // A cache that cannot be written only costs time.
+            let _ = std::fs::write(f, bytes);
+        }
+        // Memory is bounded by the folder when there is one; without it keep the last few
+        // hundred (a sequence's worth).
+        if self.memory.len() > 512 {
+            self.memory.clear();
+        }
+        self.memory.insert(k, v.clone());
+        Ok(v)
+    }
+}
+
+/// One network shared by several users (runners made one after another in an evaluation).
+#[derive(Clone)]
+pub struct SharedNet(pub std::rc::Rc<std::cell::RefCell<CachedNet>>);
+
+impl Net for SharedNet {
+    fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
+        self.0.borrow_mut().run(input)
+    }
+}
