@@ -8,7 +8,9 @@
 // them); each run opens its clip in a fresh page (the net loads from the service worker's
 // cache as the clip opens, as in the app); each clip is played `--repeat` times over (default
 // 3) in one sequence, so the keyframes have time to land. fps = frames tracked / wall time from Play to the
-// last frame. A benchmark, not a test: nothing fails on a slow run.
+// last frame. Also mean J: per tracked frame, the best mask IoU of the app's records with the
+// ground truth (the tracker's output, not the detector's: what a labeller gets). A benchmark,
+// not a test: nothing fails on a slow run.
 //
 //   npm run build && node scripts/bench-learned-fps.mjs [--clips bus,camel] [--policies off,keyframes]
 //     [--repeat N] [--port P]
@@ -30,6 +32,61 @@ const PORT = Number(text('--port') ?? 47436);
  */
 const REPEAT = Number(text('--repeat') ?? 3);
 const DAVIS = join(ROOT, '..', 'shared', 'data', 'davis2016-moving', 'DAVIS', 'JPEGImages', '480p');
+const GT = join(ROOT, '..', 'shared', 'data', 'davis2016-moving', 'DAVIS', 'Annotations', '480p');
+
+/**
+ * Mean J over the tracked frames: per frame, the best mask IoU of any record with the clip's
+ * ground-truth mask (DAVIS 2016 has one object; a frame with no record scores 0). Decoded and
+ * counted in the page.
+ * @param {import('playwright-core').Page} page
+ * @param {string} clip
+ */
+function meanJ(page, clip) {
+  const pngs = readdirSync(join(GT, clip))
+    .filter((f) => f.endsWith('.png'))
+    .sort()
+    .map((f) => readFileSync(join(GT, clip, f)).toString('base64'));
+  return page.evaluate(async (pngs) => {
+    const a = /** @type {any} */ (window).__shapetrack.app;
+    const W = a.stage.width;
+    /** @type {Uint8Array[]} */
+    const gts = [];
+    for (const b64 of pngs) {
+      const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+      const bmp = await createImageBitmap(new Blob([bytes], { type: 'image/png' }));
+      const ctx = /** @type {OffscreenCanvasRenderingContext2D} */ (new OffscreenCanvas(bmp.width, bmp.height).getContext('2d'));
+      ctx.drawImage(bmp, 0, 0);
+      const { data } = ctx.getImageData(0, 0, bmp.width, bmp.height);
+      const g = new Uint8Array(bmp.width * bmp.height);
+      for (let i = 0; i < g.length; i++) g[i] = data[4 * i] > 127 ? 1 : 0;
+      gts.push(g);
+    }
+    const area = gts.map((g) => g.reduce((n, v) => n + v, 0));
+    let sum = 0;
+    const frames = a.session.frames;
+    for (let f = 1; f <= frames; f++) {
+      const k = (f - 1) % gts.length;
+      const g = gts[k];
+      let best = 0;
+      for (const r of a.model.table.at(f)) {
+        if (!r.mask) continue;
+        const m = a.core.decodeMask(r.mask);
+        let inter = 0;
+        let n = 0;
+        for (let y = 0; y < m.height; y++) {
+          for (let x = 0; x < m.width; x++) {
+            if (!m.data[y * m.width + x]) continue;
+            n++;
+            inter += g[(m.y + y) * W + m.x + x];
+          }
+        }
+        best = Math.max(best, inter / (n + area[k] - inter));
+      }
+      sum += best;
+    }
+    return sum / frames;
+  }, pngs);
+}
 
 /** @param {string} clip */
 const frames = (clip) =>
@@ -78,7 +135,8 @@ async function run(browser, url, clip, policy) {
     await page.keyboard.press('Space');
     const s1 = await until(page, (s) => s.processed === s.frames && !s.playing);
     const secs = (Date.now() - t0) / 1000;
-    return { clip, policy, frames: s1.processed - s0.processed, fps: (s1.processed - s0.processed) / secs, learned: s1.learned, choice: s1.detectorChoice, errors };
+    const j = await meanJ(page, clip);
+    return { clip, policy, frames: s1.processed - s0.processed, fps: (s1.processed - s0.processed) / secs, j, learned: s1.learned, choice: s1.detectorChoice, errors };
   } finally {
     await page.close();
   }
@@ -91,20 +149,24 @@ try {
   await run(browser, server.url, CLIPS[0], 'keyframes');
   /** @type {Record<string, number[]>} */
   const byPolicy = {};
+  /** @type {Record<string, number[]>} */
+  const jByPolicy = {};
   for (const clip of CLIPS) {
     for (const policy of POLICIES) {
       const r = await run(browser, server.url, clip, policy);
       (byPolicy[policy] ??= []).push(r.fps);
+      (jByPolicy[policy] ??= []).push(r.j);
       const l = r.learned;
       console.log(
-        `${clip} (${r.frames} frames, ${r.choice}), learned ${policy}: ${r.fps.toFixed(1)} fps` +
+        `${clip} (${r.frames} frames, ${r.choice}), learned ${policy}: ${r.fps.toFixed(1)} fps, J ${r.j.toFixed(3)}` +
           (policy === 'keyframes' ? `; keyframes done ${l.keyframes}${l.keyframes ? ` (last ${(l.ms / 1000).toFixed(1)} s)` : ''}, frames with learned masks ${l.frames} (replaced ${l.used}, added ${l.added})${l.failed ? `, failed: ${l.failed}` : ''}` : '') +
           (r.errors.length ? `; page errors: ${r.errors.join('; ')}` : ''),
       );
     }
   }
   for (const [policy, fps] of Object.entries(byPolicy)) {
-    console.log(`mean over ${fps.length} clips, learned ${policy}: ${(fps.reduce((a, b) => a + b, 0) / fps.length).toFixed(1)} fps`);
+    const mean = (/** @type {number[]} */ xs) => xs.reduce((a, b) => a + b, 0) / xs.length;
+    console.log(`mean over ${fps.length} clips, learned ${policy}: ${mean(fps).toFixed(1)} fps, J ${mean(jByPolicy[policy]).toFixed(3)}`);
   }
   console.log(`Chromium ${browser.context.browser()?.version() ?? ''}, 854×480, load average ${(await import('node:os')).loadavg().map((x) => x.toFixed(2)).join(' ')}`);
 } finally {

@@ -1,12 +1,13 @@
 // The detector's learned keyframes (www/src/worker/learned.js) without wasm: a stand-in for the
 // core's Detections list. A keyframe's learned mask is carried to a later frame shifted by its
 // detection's displacement and takes that detection's place; a proposed region no detection
-// matches is added for a while; masks expire some frames after they arrive; a frame with
+// matches is added for a while; one that disagrees with the detection's own mask is not
+// taken; masks expire some frames after they arrive; a frame with
 // nothing to carry goes through untouched; shifted masks are clipped to the frame.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { CARRY_FRAMES, LearnedKeyframes, REGION_FRAMES, shiftMask } from '../src/worker/learned.js';
+import { AGREE_IOU, CARRY_FRAMES, LearnedKeyframes, REGION_FRAMES, maskIou, shiftMask } from '../src/worker/learned.js';
 
 /**
  * @typedef {{ bbox: { x: number, y: number, w: number, h: number }, mask?: any, score: number, class: number }} Det
@@ -96,6 +97,19 @@ test('a proposed region no detection matches is added for a while; masks expire 
   assert.equal(lk.apply(110, core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] })).use?.used, 1);
   const old = core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] });
   assert.equal(lk.apply(111 + CARRY_FRAMES, old).dets, old);
+});
+
+test('a carried mask that disagrees with the detection\'s own (IoU < AGREE_IOU) is not taken', () => {
+  const core = fakeCore();
+  const lk = new LearnedKeyframes(core, 200, 100);
+  // The learned outline covers under half of the detection's mask: stale, or another object.
+  lk.result = { frame: 1, arrived: -1, inputs: [{ x: 0, y: 0, w: 40, h: 40 }], learned: [det(0, 0, 28, 28)] };
+  const now = core.Detections.fromLists({ masks: [full(0, 0, 40, 40)] });
+  const r = lk.apply(5, now);
+  assert.equal(r.use, null);
+  assert.equal(r.dets, now);
+  assert.ok(maskIou(full(0, 0, 28, 28), full(0, 0, 40, 40)) < AGREE_IOU);
+  assert.equal(maskIou(full(0, 0, 20, 20), full(10, 0, 20, 20)), 1 / 3);
 });
 
 test('no keyframe result: the detections go through untouched', () => {

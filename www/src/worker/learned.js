@@ -202,6 +202,13 @@ export const KEYFRAME_MIN_GAP = 10;
 export const KEYFRAME_CROPS = 1;
 
 /**
+ * One keyframe in this many looks at the whole frame first (`proposals`: objects that stand
+ * still); the others only at the top detection's crop, one inference instead of two, so their
+ * masks are half as old when they land (the first keyframe is a whole-frame one).
+ */
+export const KEYFRAME_WHOLE_EVERY = 3;
+
+/**
  * Frames a keyframe's masks are carried after they arrive (they are then as old as the
  * keyframe took, plus this). Shifted by their detection's motion, they follow an object that
  * moves; they do not follow its changes of shape and size, which grow with time: 3 seconds at
@@ -219,6 +226,41 @@ export const REGION_FRAMES = 25;
 
 /** Box IoU above which a learned mask and a detection are the same object (see `apply`). */
 export const MATCH_IOU = 0.3;
+
+/**
+ * Mask IoU a carried learned mask must have with the detection's own mask to take its place.
+ * A keyframe's mask is seconds old when it lands on this machine (a keyframe takes 10 s or
+ * more beside the tracker under load); shifted, it is still the object's outline while the
+ * object keeps its shape, and no longer when it turned or the match was wrong. Replaced
+ * unconditionally, the carried masks lowered the tracker's mean J on four DAVIS moving-camera
+ * clips from 0.736 to 0.650 (scripts/bench-learned-fps.mjs, 2026-12-06); the follower takes
+ * a learned outline by the same test (`FollowConfig::learned_iou`, 0.5).
+ */
+export const AGREE_IOU = 0.5;
+
+/**
+ * Mask IoU of two cropped masks.
+ * @param {MaskBitmap} a
+ * @param {MaskBitmap} b
+ */
+export function maskIou(a, b) {
+  let inter = 0;
+  let na = 0;
+  let nb = 0;
+  for (const v of a.data) na += v ? 1 : 0;
+  for (const v of b.data) nb += v ? 1 : 0;
+  const x0 = Math.max(a.x, b.x);
+  const x1 = Math.min(a.x + a.width, b.x + b.width);
+  const y0 = Math.max(a.y, b.y);
+  const y1 = Math.min(a.y + a.height, b.y + b.height);
+  for (let y = y0; y < y1; y++) {
+    for (let x = x0; x < x1; x++) {
+      if (a.data[(y - a.y) * a.width + x - a.x] && b.data[(y - b.y) * b.width + x - b.x]) inter++;
+    }
+  }
+  const union = na + nb - inter;
+  return union ? inter / union : 0;
+}
 
 /** Share of a learned region's pixels on a current detection above which it is not added. */
 const COVERED = 0.5;
@@ -287,7 +329,8 @@ const centre = (b) => [b.x + b.w / 2, b.y + b.h / 2];
  *    carried to this frame. A learned mask is matched to the keyframe's detection it came
  *    from (box IoU ≥ `MATCH_IOU`; a region the whole frame proposed stands for itself), that
  *    box to this frame's detections (the same), and shifted by the displacement of their
- *    boxes' centres; it then takes the place of the matched detection's mask. A proposed
+ *    boxes' centres; it then takes the place of the matched detection's mask if the two
+ *    masks agree (IoU ≥ `AGREE_IOU`: a stale or mismatched outline is not taken). A proposed
  *    region no detection of this frame matches is added where it was (an object standing
  *    still), for `REGION_FRAMES` at most, unless a detection covers it. For `CARRY_FRAMES` at
  *    most after they arrive, or until the next keyframe's masks do.
@@ -316,6 +359,8 @@ export class LearnedKeyframes {
      * the latest keyframe's result (`arrived`: the first frame it was applied to) */
     this.result = null;
     this.keyframes = 0;
+    /** keyframes started */
+    this.started = 0;
     this.ms = 0;
     /** @type {string | null} */
     this.failed = null;
@@ -349,7 +394,9 @@ export class LearnedKeyframes {
     /** @type {import('../../pkg/shapetrack.js').SegmentJob} */
     let job;
     try {
-      job = new this.core.SegmentJob(this.copy, boxes, 'proposals', { max_crops: KEYFRAME_CROPS });
+      const whole = this.started % KEYFRAME_WHOLE_EVERY === 0 ? 'proposals' : 'off';
+      job = new this.core.SegmentJob(this.copy, boxes, whole, { max_crops: KEYFRAME_CROPS });
+      this.started += 1;
     } finally {
       boxes.free();
     }
@@ -422,6 +469,8 @@ export class LearnedKeyframes {
       const [kx, ky] = centre(kb);
       const [dx, dy] = centre(list[j].bbox);
       const moved = shiftMask(lm, Math.round(dx - kx), Math.round(dy - ky), this.width, this.height);
+      const own = list[j].mask;
+      if (moved && own && maskIou(moved, own) < AGREE_IOU) continue;
       if (moved && (!take[j] || bj > /** @type {{ iou: number }} */ (take[j]).iou)) take[j] = { mask: moved, iou: bj };
     }
     let used = 0;
