@@ -1,5 +1,5 @@
 // The automatic detector with the learned stage (issue 63, `?learned=keyframes`) on a
-// moving-camera clip, DAVIS-2016 camel (854×480, 90 frames), with the network off after a
+// moving-camera clip, DAVIS-2016 camel (854×480, 90 frames, played twice over), with the network off after a
 // first visit: the segmenter's files come from the service worker's cache, keyframes are
 // segmented in the background while the frames go on, and their learned masks replace the
 // detector's on later frames (the page counts them). Nothing reaches the server offline. The
@@ -9,7 +9,7 @@
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { readdirSync } from 'node:fs';
+import { readFileSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { ROOT, untilState, watchErrors, withApp } from './harness.mjs';
 
@@ -18,11 +18,17 @@ const JPEG = join(ROOT, '..', 'shared', 'data', 'davis2016-moving', 'DAVIS', 'JP
 
 const app = withApp({ port: PORT });
 
-const frames = () =>
-  readdirSync(JPEG)
+/**
+ * The clip played twice over as one sequence (a cut at the restart): room for a slow
+ * keyframe on a busy machine before the frames run out.
+ */
+const frames = () => {
+  const one = readdirSync(JPEG)
     .filter((f) => f.endsWith('.jpg'))
     .sort()
-    .map((f) => join(JPEG, f));
+    .map((f) => readFileSync(join(JPEG, f)));
+  return [0, 1].flatMap((k) => one.map((buffer, i) => ({ name: `${k}-${String(i).padStart(5, '0')}.jpg`, mimeType: 'image/jpeg', buffer })));
+};
 
 /**
  * Opens the clip in `page` with the learned stage on; frame 1 tracked, paused.
@@ -42,13 +48,13 @@ async function openClip(page) {
  * @param {import('playwright-core').Page} page
  */
 async function trackWithKeyframe(page) {
-  const deadline = Date.now() + 180_000;
+  const deadline = Date.now() + 240_000;
   for (;;) {
     const s = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
     assert.equal(s.learned.failed, null, 'the learned stage runs');
     if (s.learned.keyframes >= 1) break;
     assert.ok(s.processed < s.frames - 20, `a keyframe landed before frame ${s.frames - 20} (state ${JSON.stringify(s.learned)})`);
-    assert.ok(Date.now() < deadline, 'a keyframe within 3 minutes');
+    assert.ok(Date.now() < deadline, 'a keyframe within 4 minutes');
     await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.stepForward());
     await page.waitForTimeout(400);
   }
