@@ -6,10 +6,11 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 use shapetrack::follow::{
-    follow_sequence, interpolate_masks, rasterize_polygon, FollowConfig, FollowError,
+    follow_sequence, interpolate_masks, rasterize_polygon, FollowConfig, FollowError, Follower,
 };
 use shapetrack::frame::{BBox, Detection, Frame, Mask, Point};
 use shapetrack::io::motchallenge::parse_mots;
+use shapetrack::segment::{Crop, Saliency, OUTPUT_LEN, SIDE};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -412,4 +413,73 @@ fn cli_writes_mots_that_reads_back_and_refuses_bad_input() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A stand-in for the segmentation network that sees `shown`: its map is 1 on the crop's
+/// pixels inside `shown` and 0 elsewhere (the real network is tested in tests/segment_model.rs).
+fn oracle_map(crop: &Crop, shown: &Mask) -> Vec<f32> {
+    let mut out = vec![0f32; OUTPUT_LEN];
+    for v in 0..SIDE {
+        for u in 0..SIDE {
+            let x = crop.x as f64 + (u as f64 + 0.5) * crop.w as f64 / SIDE as f64;
+            let y = crop.y as f64 + (v as f64 + 0.5) * crop.h as f64 / SIDE as f64;
+            if shown.get(x.floor() as i32, y.floor() as i32) {
+                out[v * SIDE + u] = 1.0;
+            }
+        }
+    }
+    out
+}
+
+/// Follows the generated target through `n` frames with the learned map of `shown(i)` in each;
+/// returns each frame's (IoU with the truth, whether the learned outline was taken).
+fn follow_learned(n: usize, cfg: &FollowConfig, shown: impl Fn(&Mask) -> Mask) -> Vec<(f64, bool)> {
+    let scenes: Vec<(Vec<u8>, Mask)> = (0..n).map(render).collect();
+    let first = Frame::rgb(&scenes[0].0, W, H).unwrap();
+    let mut f = Follower::new(&first, &scenes[0].1, cfg.clone()).unwrap();
+    scenes[1..]
+        .iter()
+        .map(|(rgb, truth)| {
+            let frame = Frame::rgb(rgb, W, H).unwrap();
+            let crop = f.learned_crop().expect("a running follower has a crop");
+            let sal = Saliency::new(crop, &oracle_map(&crop, &shown(truth)), true).unwrap();
+            let s = f.step_learned(&frame, &[], Some(&sal)).unwrap();
+            (s.mask.iou(truth), s.from_learned)
+        })
+        .collect()
+}
+
+#[test]
+fn the_learned_outline_is_taken_where_it_agrees_and_only_while_the_follower_is_unsure() {
+    let always = FollowConfig {
+        learned_below: 1.0,
+        ..FollowConfig::default()
+    };
+    // Consulted on every frame, a map of the object itself is taken and holds the object.
+    let got = follow_learned(10, &always, Mask::clone);
+    assert!(got.iter().all(|&(iou, l)| l && iou > 0.95), "{got:.3?}");
+    // The net is consulted only while the follower's confidence is below `learned_below`
+    // (by default 0.5; this small textured target has few keypoints, so its confidence is
+    // low and the map is taken); at 0 never, and the follower's own outline stands.
+    let got = follow_learned(10, &FollowConfig::default(), Mask::clone);
+    assert!(got.iter().all(|&(iou, _)| iou > 0.95), "{got:.3?}");
+    let never = FollowConfig {
+        learned_below: 0.0,
+        ..FollowConfig::default()
+    };
+    let got = follow_learned(10, &never, Mask::clone);
+    assert!(got.iter().all(|&(iou, l)| !l && iou > 0.8), "{got:.3?}");
+    // A map of the object's left half (a crop that showed the network a part as the whole)
+    // would lose half the outline: refused (`learned_max_shrink`), the outline is kept.
+    let half = |t: &Mask| {
+        let b = t.bbox();
+        let keep = Mask::from_bbox(&BBox { w: b.w * 0.5, ..b });
+        let bits: Vec<u8> = (0..H as i32)
+            .flat_map(|y| (0..W as i32).map(move |x| (x, y)))
+            .map(|(x, y)| u8::from(t.get(x, y) && keep.get(x, y)))
+            .collect();
+        Mask::from_full(W, H, &bits).unwrap()
+    };
+    let got = follow_learned(10, &always, half);
+    assert!(got.iter().all(|&(iou, l)| !l && iou > 0.8), "{got:.3?}");
 }
