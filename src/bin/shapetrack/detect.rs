@@ -26,7 +26,7 @@ use shapetrack::detect::{
 };
 use shapetrack::io::motchallenge::{parse_mot, write_mots};
 use shapetrack::io::{image_files, read_rgb, read_text, write_text, IoError, Record, Rle};
-use shapetrack::segment::{Job, Net, SegmentConfig, TractNet, WholeFrame};
+use shapetrack::segment::{Job, Net, SegmentConfig, WholeFrame};
 use shapetrack::{Detection, Frame};
 use std::path::{Path, PathBuf};
 
@@ -109,17 +109,33 @@ impl ModelChoice {
 
     /// The network, or `None` for the weights-free path (`what` names the command in the
     /// warning printed when the model is missing).
-    pub fn load(&self, what: &str) -> Result<Option<TractNet>, Box<dyn std::error::Error>> {
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn load(&self, what: &str) -> Result<Option<Box<dyn Net>>, Box<dyn std::error::Error>> {
+        use shapetrack::segment::TractNet;
         match self {
             ModelChoice::Off => Ok(None),
-            ModelChoice::Path(p) => Ok(Some(TractNet::load(Some(p))?)),
+            ModelChoice::Path(p) => Ok(Some(Box::new(TractNet::load(Some(p))?))),
             ModelChoice::Default => match TractNet::load(None) {
-                Ok(n) => Ok(Some(n)),
+                Ok(n) => Ok(Some(Box::new(n))),
                 Err(e) => {
                     eprintln!("{what}: warning: {e}\n{what}: using the weights-free path");
                     Ok(None)
                 }
             },
+        }
+    }
+
+    /// The CLI compiled for wasm32 (only so `wasm-pack test` builds every target) has no
+    /// native network: the weights-free path, or an error when a model file is named.
+    #[cfg(target_arch = "wasm32")]
+    pub fn load(&self, _what: &str) -> Result<Option<Box<dyn Net>>, Box<dyn std::error::Error>> {
+        match self {
+            ModelChoice::Path(p) => Err(format!(
+                "{}: the learned segmentation runs natively only",
+                p.display()
+            )
+            .into()),
+            _ => Ok(None),
         }
     }
 }
@@ -376,7 +392,7 @@ pub fn run(args: Args) -> crate::CliResult {
                 None => SegmentConfig::default(),
             };
             runner = runner.learned(Learned {
-                net: Box::new(net),
+                net,
                 cfg,
                 whole: AUTO_WHOLE_FRAME,
             });

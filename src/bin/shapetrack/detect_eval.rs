@@ -337,7 +337,7 @@ pub fn run(args: Args) -> crate::CliResult {
     let net = if uses_model {
         match ModelChoice::from_flag(args.model.as_deref()).load("detect-eval")? {
             Some(n) => Some(SharedNet(std::rc::Rc::new(std::cell::RefCell::new(
-                CachedNet::new(Box::new(n), args.net_cache.clone())?,
+                CachedNet::new(n, args.net_cache.clone())?,
             )))),
             None => None,
         }

@@ -85,10 +85,7 @@ fn shared_net(
     what: &str,
 ) -> Result<Option<SharedNet>, Box<dyn std::error::Error>> {
     Ok(match ModelChoice::from_flag(model).load(what)? {
-        Some(n) => Some(SharedNet(Rc::new(RefCell::new(CachedNet::new(
-            Box::new(n),
-            cache,
-        )?)))),
+        Some(n) => Some(SharedNet(Rc::new(RefCell::new(CachedNet::new(n, cache)?)))),
         None => None,
     })
 }

@@ -3,6 +3,12 @@
 //! (thresholds, fusion rules) re-runs in seconds instead of hours. Outputs are keyed by a hash
 //! of the input tensor's bits, so a cached output is the one the network gave for exactly
 //! that input. Never used by `detect` or `follow` themselves unless asked.
+//!
+//! With a cache folder, `SHAPETRACK_EVAL_NET="CMD ARGS…"` runs the network in that command
+//! instead of tract (`PipeNet`: input tensors to its stdin, outputs from its stdout, raw
+//! little-endian `f32`), e.g. `scripts/ort_net.py` with onnxruntime: the browser's runtime's
+//! arithmetic at about four times tract's speed, for long evaluation grids. The crops, the
+//! thresholds and everything after the network are the CLI's own either way.
 
 use shapetrack::segment::{Net, SegmentError, OUTPUT_LEN};
 use std::collections::hash_map::DefaultHasher;
@@ -24,8 +30,12 @@ pub struct CachedNet {
 impl CachedNet {
     /// Wraps `inner`; `dir` (created when missing) keeps outputs between runs.
     pub fn new(inner: Box<dyn Net>, dir: Option<PathBuf>) -> std::io::Result<CachedNet> {
+        let mut inner = inner;
         if let Some(d) = &dir {
             std::fs::create_dir_all(d)?;
+            if let Some(cmd) = std::env::var_os("SHAPETRACK_EVAL_NET") {
+                inner = Box::new(PipeNet::spawn(&cmd.to_string_lossy())?);
+            }
         }
         Ok(CachedNet {
             inner,
@@ -89,5 +99,55 @@ pub struct SharedNet(pub std::rc::Rc<std::cell::RefCell<CachedNet>>);
 impl Net for SharedNet {
     fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
         self.0.borrow_mut().run(input)
+    }
+}
+
+/// The network run by another process (evaluation only, see the module's documentation).
+struct PipeNet {
+    child: std::process::Child,
+}
+
+impl PipeNet {
+    fn spawn(cmd: &str) -> std::io::Result<PipeNet> {
+        let mut parts = cmd.split_whitespace();
+        let prog = parts
+            .next()
+            .ok_or_else(|| std::io::Error::other("SHAPETRACK_EVAL_NET is empty"))?;
+        let child = std::process::Command::new(prog)
+            .args(parts)
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()?;
+        Ok(PipeNet { child })
+    }
+}
+
+impl Net for PipeNet {
+    fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
+        use std::io::{Read, Write};
+        let fail = |e: std::io::Error| SegmentError::Model(format!("SHAPETRACK_EVAL_NET: {e}"));
+        let bytes: Vec<u8> = input.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let (Some(stdin), Some(stdout)) = (self.child.stdin.as_mut(), self.child.stdout.as_mut())
+        else {
+            return Err(fail(std::io::Error::other("no pipe")));
+        };
+        stdin
+            .write_all(&bytes)
+            .and_then(|_| stdin.flush())
+            .map_err(fail)?;
+        let mut out = vec![0u8; OUTPUT_LEN * 4];
+        stdout.read_exact(&mut out).map_err(fail)?;
+        Ok(out
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect())
+    }
+}
+
+impl Drop for PipeNet {
+    fn drop(&mut self) {
+        // Closing its stdin ends the helper process's loop.
+        self.child.stdin = None;
+        let _ = self.child.wait();
     }
 }
