@@ -373,15 +373,19 @@ test('bad files are refused with a message, not a crash', async () => {
 // the flow cue's settings: 758.9 → 776 KiB; mean J on the DAVIS moving-camera clips 0.48 →
 // 0.67); 780 → 784 KB with the per-mask passes over row runs (`src/runs.rs`: closed-form
 // moments per run, word scans for boxes and hulls, the RLE encoder's XOR column changes and
-// counting sort: 778.8 → 781.4 KiB; native 20 shapes 0.89 → 0.56–0.80 ms/frame).
-test('wasm is at most 784 KB gzipped', () => {
+// counting sort: 778.8 → 781.4 KiB; native 20 shapes 0.89 → 0.56–0.80 ms/frame); 784 → 804 KB
+// with the learned segmentation's core (`src/segment/`: crops, the network's input tensor, its
+// map back to masks, the frame's job, `SegmentJob`; the follower's learned step: 781.4 → 799
+// KiB; refinement J on the 21 DAVIS clips 0.681 → 0.831, tests/data/detect/README.md). The
+// network itself is not in this module (onnxruntime-web, loaded on first use).
+test('wasm is at most 804 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
   assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
   const bytes = readFileSync(join(dir, wasm[0]));
   const gz = gzipSync(bytes, { level: 9 }).length;
   console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
-  assert.ok(gz <= 784 * 1024, `${gz} bytes gzipped`);
+  assert.ok(gz <= 804 * 1024, `${gz} bytes gzipped`);
 });
 
 test('no request left localhost', () => {
