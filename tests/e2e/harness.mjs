@@ -4,7 +4,7 @@
 
 import { createServer } from 'node:http';
 import { after, afterEach, before } from 'node:test';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { appendFileSync, existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { extname, join, normalize, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -158,7 +158,10 @@ export function watchErrors(page) {
   page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
   page.on('console', (m) => {
     if (m.type() === 'error') errors.push(`console: ${m.text()}`);
+    // E2E_CONSOLE=1: every console line of the page (a hung step's last words).
+    if (process.env.E2E_CONSOLE) appendFileSync(process.env.E2E_CONSOLE, `${new Date().toISOString()} [console ${m.type()}] ${m.text()}\n`);
   });
+  if (process.env.E2E_CONSOLE) page.on('worker', (w) => appendFileSync(`${process.env.E2E_CONSOLE}`, `${new Date().toISOString()} [worker] ${w.url()}\n`));
   return errors;
 }
 

@@ -80,31 +80,71 @@ test('the installed @mediapipe/objectron: labels at 0…184, the model at 184…
   t.diagnostic(`model ${s.model.length} bytes, sha256 ${s.sha256}`);
 });
 
-test("tfjs-tflite's feature check sees no SharedArrayBuffer (the app is cross-origin isolated, its threaded runtime not shipped), and only during the call", async () => {
-  const { singleThreadedFeatures } = await import('../src/worker/detectors/ssd.js');
+test("tfjs-tflite's feature check and load see no SharedArrayBuffer (the app is cross-origin isolated, its threaded runtime not shipped), and only while they run", async () => {
+  const { withoutSharedMemory } = await import('../src/worker/detectors/ssd.js');
   /** @type {unknown[]} */
   const seen = [];
-  const features = await singleThreadedFeatures(async () => {
-    // What tfjs-tflite's check does first, synchronously: try to make one.
-    let multiThreading = true;
+  /** What tfjs-tflite's check does, synchronously, at any point of the load. */
+  const threaded = () => {
     try {
       new SharedArrayBuffer(1);
+      return true;
     } catch {
-      multiThreading = false;
+      return false;
     }
-    seen.push(typeof globalThis.SharedArrayBuffer);
+  };
+  const features = await withoutSharedMemory(async () => {
+    seen.push(threaded());
     await null;
-    seen.push(typeof globalThis.SharedArrayBuffer);
-    return { simd: true, multiThreading };
+    // A later check (the loader's own, after awaits) sees the same.
+    await new Promise((r) => setTimeout(r, 5));
+    seen.push(threaded());
+    return { simd: true, multiThreading: threaded() };
   });
   assert.deepEqual(features, { simd: true, multiThreading: false });
-  assert.deepEqual(seen, ['undefined', 'function'], 'hidden for the synchronous step, back after it');
-  assert.equal(typeof SharedArrayBuffer, 'function');
-  // A throwing check puts it back too.
-  assert.throws(() =>
-    singleThreadedFeatures(() => {
+  assert.deepEqual(seen, [false, false], 'hidden across the awaits of the load');
+  assert.equal(typeof SharedArrayBuffer, 'function', 'back once it settled');
+  // A failing load puts it back too.
+  await assert.rejects(
+    withoutSharedMemory(async () => {
+      await null;
       throw new Error('boom');
     }),
+    /boom/,
   );
   assert.equal(typeof SharedArrayBuffer, 'function');
+});
+
+test("the TFLite loader's importScripts stand-in runs the fetched script, for its threaded name too, and reports its own failure over the loader's", async () => {
+  const { withImportScripts } = await import('../src/worker/detectors/ssd.js');
+  const g = /** @type {any} */ (globalThis);
+  const hadSelf = 'self' in g;
+  if (!hadSelf) g.self = { location: { href: 'http://app.test/assets/worker.js' } };
+  try {
+    const url = 'http://app.test/ssd/tflite/tflite_web_api_cc_simd.js';
+    const code = 'exports.tflite_web_api_ModuleFactory = () => "runtime";';
+    for (const asked of [url, '../ssd/tflite/tflite_web_api_cc_simd_threaded.js']) {
+      const factory = await withImportScripts(url, code, async () => {
+        g.importScripts(asked);
+        return g.tflite_web_api_ModuleFactory();
+      });
+      assert.equal(factory, 'runtime', asked);
+      assert.equal(typeof g.importScripts, 'undefined', 'the stand-in is gone after the load');
+      delete g.tflite_web_api_ModuleFactory;
+    }
+    // Another script: refused, and the loader's later failure reported as the stand-in's.
+    await assert.rejects(
+      withImportScripts(url, code, async () => {
+        try {
+          g.importScripts('http://app.test/elsewhere.js');
+        } catch {
+          // tfjs-tflite swallows it and fails later on `undefined._malloc`
+        }
+        throw new TypeError("Cannot read properties of undefined (reading '_malloc')");
+      }),
+      /SSD detector: its runtime script did not load: importScripts\(http:\/\/app.test\/elsewhere.js\): not the TFLite runtime/,
+    );
+  } finally {
+    if (!hadSelf) delete g.self;
+  }
 });

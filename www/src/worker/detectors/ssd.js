@@ -86,28 +86,46 @@ async function fetchOk(url) {
  * stand-in runs the already fetched script and publishes the factory it defines on the global
  * scope, where the loader looks for it.
  * @template T
- * @param {string} url the only script the stand-in accepts
+ * @param {string} url the only script the stand-in accepts (with its threaded sibling)
  * @param {string} code its text
  * @param {() => Promise<T>} fn
  * @returns {Promise<T>}
  */
-async function withImportScripts(url, code, fn) {
+export async function withImportScripts(url, code, fn) {
   const g = /** @type {Record<string, unknown>} */ (/** @type {unknown} */ (globalThis));
   const own = Object.prototype.hasOwnProperty.call(g, 'importScripts');
   const previous = g.importScripts;
+  // The loader swallows a failing importScripts and goes on with no runtime (it then fails on
+  // `undefined._malloc`): the stand-in's own error is kept to be reported in its place.
+  /** @type {unknown} */
+  let failure = null;
   g.importScripts = (/** @type {string[]} */ ...urls) => {
-    for (const u of urls) {
-      if (new URL(u, self.location.href).href !== url) throw new Error(`importScripts(${u}): not the TFLite runtime`);
-      // The script ends with a UMD tail: without `module` and `define` it assigns its factory
-      // to `exports`.
-      /** @type {Record<string, unknown>} */
-      const exports = {};
-      new Function('exports', code)(exports);
-      Object.assign(g, exports);
+    try {
+      for (const u of urls) {
+        const asked = new URL(u, self.location.href).href;
+        // The threaded sibling of `url` (`…_simd_threaded.js`) is served by `url`'s script: see
+        // `withoutSharedMemory`. Its factory has the same name and the same options; the
+        // single-threaded build runs the model on this thread whatever `numThreads` says.
+        if (asked !== url && asked !== url.replace(/\.js$/, '_threaded.js')) {
+          throw new Error(`importScripts(${u}): not the TFLite runtime (${url})`);
+        }
+        // The script ends with a UMD tail: without `module` and `define` it assigns its factory
+        // to `exports`.
+        /** @type {Record<string, unknown>} */
+        const exports = {};
+        new Function('exports', code)(exports);
+        Object.assign(g, exports);
+      }
+    } catch (e) {
+      failure ??= e;
+      throw e;
     }
   };
   try {
     return await fn();
+  } catch (e) {
+    if (failure) throw new Error(`SSD detector: its runtime script did not load: ${failure instanceof Error ? failure.message : failure}`);
+    throw e;
   } finally {
     if (own) g.importScripts = previous;
     else delete g.importScripts;
@@ -115,23 +133,27 @@ async function withImportScripts(url, code, fn) {
 }
 
 /**
- * tfjs-tflite's wasm features, as it will use them, with multithreading reported absent. The
- * app is cross-origin isolated (for the learned segmenter's threads, scripts/vite-isolation.mjs),
- * so SharedArrayBuffer exists, and tfjs-tflite would then load its threaded runtime, which the
- * app does not ship: its thread workers are classic scripts that load the runtime themselves,
- * beside the stand-in that runs it in this module worker (`withImportScripts`), and on a
- * 2-core machine it would run one thread anyway (`numThreads: -1` is half the cores). Its
- * feature check tries a SharedArrayBuffer once and keeps the answer for every later load:
- * SharedArrayBuffer is out of sight for that synchronous first step only, then back.
- * @param {() => Promise<{ simd: boolean, multiThreading: boolean }>} getWasmFeatures
+ * Runs `fn` (tfjs-tflite's feature check and model load) with SharedArrayBuffer out of sight,
+ * and puts it back when `fn` settles. The app is cross-origin isolated (for the learned
+ * segmenter's threads, scripts/vite-isolation.mjs), so SharedArrayBuffer exists, and tfjs-tflite
+ * would then load its threaded runtime, which the app does not ship: its thread workers are
+ * classic scripts that load the runtime themselves, beside the stand-in that runs it in this
+ * module worker (`withImportScripts`), and on a 2-core machine it would run one thread anyway.
+ * Hidden for the whole load (nothing else in this worker uses it). Even so, on about one load in
+ * thirty in the e2e suite the loader asked for the threaded file after this check had answered
+ * single-threaded (the cause is inside tfjs-tflite's Closure bundle and not understood):
+ * `withImportScripts` runs the single-threaded script in its place.
+ * @template T
+ * @param {() => Promise<T>} fn
+ * @returns {Promise<T>}
  */
-export function singleThreadedFeatures(getWasmFeatures) {
+export async function withoutSharedMemory(fn) {
   const g = /** @type {Record<string, unknown>} */ (/** @type {unknown} */ (globalThis));
   const own = Object.prototype.hasOwnProperty.call(g, 'SharedArrayBuffer');
   const sab = g.SharedArrayBuffer;
   if (own) delete g.SharedArrayBuffer;
   try {
-    return getWasmFeatures();
+    return await fn();
   } finally {
     if (own) g.SharedArrayBuffer = sab;
   }
@@ -142,17 +164,19 @@ async function loadModel() {
   const rt = await import('virtual:shapetrack-ssd');
   const base = new URL(rt.runtimeUrl, self.location.href).href;
   rt.setWasmPath(base);
-  const { simd, multiThreading } = await singleThreadedFeatures(rt.getWasmFeatures);
-  if (multiThreading) {
-    throw new Error('SSD detector: tfjs-tflite chose its threaded runtime, which the app does not ship');
-  }
-  const script = new URL(simd ? 'tflite_web_api_cc_simd.js' : 'tflite_web_api_cc.js', base).href;
-  const [code, weights, labelsText] = await Promise.all([
-    fetchOk(script).then((r) => r.text()),
-    fetchOk(new URL(rt.modelUrl, self.location.href).href).then((r) => r.arrayBuffer()),
-    fetchOk(new URL(rt.labelsUrl, self.location.href).href).then((r) => r.text()),
-  ]);
-  const model = await withImportScripts(script, code, () => rt.loadTFLiteModel(weights, { numThreads: -1 }));
+  const model = await withoutSharedMemory(async () => {
+    const { simd, multiThreading } = await rt.getWasmFeatures();
+    if (multiThreading) {
+      throw new Error('SSD detector: tfjs-tflite chose its threaded runtime, which the app does not ship');
+    }
+    const script = new URL(simd ? 'tflite_web_api_cc_simd.js' : 'tflite_web_api_cc.js', base).href;
+    const [code, weights] = await Promise.all([
+      fetchOk(script).then((r) => r.text()),
+      fetchOk(new URL(rt.modelUrl, self.location.href).href).then((r) => r.arrayBuffer()),
+    ]);
+    return withImportScripts(script, code, () => rt.loadTFLiteModel(weights, { numThreads: -1 }));
+  });
+  const labelsText = await fetchOk(new URL(rt.labelsUrl, self.location.href).href).then((r) => r.text());
   const runner = model.modelRunner;
   const [input] = runner.getInputs();
   if (!input || input.shape !== `1,${INPUT},${INPUT},3` || input.dataType !== 'float32') {
