@@ -1,0 +1,140 @@
+// Opening a source (the demo scene, a video, an image sequence, the webcam, a dropped file) and
+// choosing the detector it is tracked with.
+
+import { TrackTable } from '../model/tracks.js';
+import { byId } from '../lib/dom.js';
+import { videoSource, imageSource, webcamSource } from '../sources/sources.js';
+
+/**
+ * @typedef {import('../app.js').App} App
+ * @typedef {import('../app.js').AnySource} AnySource
+ * @typedef {import('../sources/sources.js').Source} Source
+ */
+
+/**
+ * Opens the synthetic demo scene (rendered and tracked in the worker).
+ * @param {App} app
+ */
+export async function openDemo(app) {
+  await app.openSource(null);
+}
+
+/**
+ * @param {App} app
+ * @param {File} file
+ */
+export async function openVideo(app, file) {
+  await app.openSource(await videoSource(byId('video', HTMLVideoElement), file));
+}
+
+/**
+ * @param {App} app
+ * @param {File[]} files
+ */
+export async function openImages(app, files) {
+  await app.openSource(await imageSource(files));
+}
+
+/** @param {App} app */
+export async function openWebcam(app) {
+  await app.openSource(await webcamSource(byId('video', HTMLVideoElement)));
+}
+
+/**
+ * Starts a tracking session on a source (null: the synthetic demo).
+ * @param {App} app
+ * @param {Source | null} src
+ */
+export async function openSource(app, src) {
+  await app.stop();
+  if (app.source && app.source.kind !== 'synth') app.source.close();
+  app.status(src ? `opening ${src.name}…` : 'starting the demo scene…');
+  const opened = await app.worker.open({
+    source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: app.scene },
+    detector: app.detectorFor(src),
+    ...(app.tracker ? { tracker: app.tracker } : {}),
+    ...(app.offlineSettings ? { offlineSettings: app.offlineSettings } : {}),
+    offline: src?.kind !== 'webcam',
+    learned: app.learnedPolicy,
+  });
+  app.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, failed: null };
+  /** @type {AnySource} */
+  const source = src ?? {
+    kind: 'synth',
+    name: app.scene,
+    width: opened.width,
+    height: opened.height,
+    frames: opened.frames ?? 0,
+    fps: opened.fps,
+  };
+  app.source = source;
+  app.detectorChoice = null;
+  app.warming = false;
+  // A detector with classes names them: the overlay shows them and exports carry them.
+  if (opened.classes.length) app.labels = opened.classes.flatMap((name, i) => (name ? [{ class: i, name }] : []));
+  app.session.open({ frames: source.frames ?? 0, offlineCapable: opened.offline });
+  app.cur = 0;
+  app.selection = { a: null, b: null };
+  app.fps.reset();
+  app.model.replaceAll([]);
+  if (source.kind === 'synth') {
+    app.gt = new TrackTable();
+    app.gtName = 'scene ground truth';
+  } else if (!app.gtName.startsWith('file')) {
+    app.gt = null;
+    app.gtName = '';
+  }
+  app.scores = null;
+  app.stage.resize(source.width, source.height);
+  byId('empty').hidden = true;
+  app.status(`${source.name}: ${source.width}×${source.height}${source.frames ? `, ${source.frames} frames` : ''} · core ${opened.version}`);
+  await app.stepForward();
+}
+
+/**
+ * The detector a source gets: the menu's, except that `auto` keeps the background detector
+ * on the synthetic demo (a still camera by construction; its quality figures are the
+ * background detector's).
+ * @param {App} app
+ * @param {Source | AnySource | null} src null: the synthetic demo
+ */
+export function detectorFor(app, src) {
+  return app.detector === 'auto' && (!src || src.kind === 'synth') ? 'background' : app.detector;
+}
+
+/**
+ * Uses another detector: for the next source, and, while a source is being tracked, from its
+ * next frame on (the tracks so far stay; nothing is reopened).
+ * @param {App} app
+ * @param {string} name
+ * @param {string} label
+ */
+export async function changeDetector(app, name, label) {
+  app.detector = name;
+  if (app.session.phase !== 'tracking') {
+    app.status(`detector: ${label} (for the next video)`);
+    return;
+  }
+  // Frames in flight finish with the old detector; the switch lands between two frames.
+  const wasPlaying = app.playing;
+  await app.stop();
+  const { classes } = await app.worker.setDetector(app.detectorFor(app.source));
+  app.detectorChoice = null;
+  app.warming = false;
+  if (classes.length) app.labels = classes.flatMap((n, i) => (n ? [{ class: i, name: n }] : []));
+  app.status(`detector: ${label} from frame ${app.session.processed + 1}`);
+  if (wasPlaying) app.play();
+}
+
+/**
+ * @param {App} app
+ * @param {File[]} list
+ */
+export async function openDropped(app, list) {
+  if (!list.length) return;
+  const video = list.find((f) => f.type.startsWith('video/'));
+  if (video) return app.openVideo(video);
+  const images = list.filter((f) => f.type.startsWith('image/'));
+  if (images.length) return app.openImages(images);
+  return app.importTracks(list[0].name, await list[0].text());
+}
