@@ -4,6 +4,7 @@
 use super::error::{EvalError, Location, Problem, Side};
 use super::masks;
 use super::sequence::{Assigner, SequenceBuilder, SequenceData};
+pub use crate::io::sequence::{Origin, SequenceInput};
 use crate::io::{Record, Rle};
 use serde::{Deserialize, Serialize};
 
@@ -122,32 +123,6 @@ impl EvalConfig {
             threshold: 0.5,
         }
     }
-}
-
-/// Where a vector of records was read from, so errors can name the file and line.
-#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub struct Origin {
-    /// File name.
-    pub file: String,
-    /// `lines[i]`: 1-based line of record `i`.
-    pub lines: Vec<usize>,
-}
-
-/// One sequence to evaluate: ground truth and tracker records, frames `1..=num_frames`.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-pub struct SequenceInput {
-    /// Sequence name.
-    pub name: String,
-    /// Number of frames (`seqLength`); records beyond are an error.
-    pub num_frames: u32,
-    /// Ground-truth records.
-    pub gt: Vec<Record>,
-    /// Tracker records.
-    pub results: Vec<Record>,
-    /// Where `gt` came from, if from a file.
-    pub gt_origin: Option<Origin>,
-    /// Where `results` came from, if from a file.
-    pub results_origin: Option<Origin>,
 }
 
 impl SequenceInput {

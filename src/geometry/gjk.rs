@@ -11,6 +11,29 @@ use std::sync::OnceLock;
 use super::shell::{aabbs_overlap, cross, point_segment_distance, ConvexShell, TOUCH_TOLERANCE};
 use crate::frame::{BBox, Point};
 
+// The shells' GJK queries live here, beside the prepared shapes they run on, so that
+// `shell` (the triangulation and hull) does not depend back on this module.
+impl ConvexShell {
+    /// Whether the two closed shells intersect (touching counts, up to f32 rounding), by
+    /// parry2d's GJK after a bounding-box early-out. Empty shells intersect nothing.
+    pub fn intersects(&self, other: &ConvexShell) -> bool {
+        if !aabbs_overlap(&self.aabb(), &other.aabb(), TOUCH_TOLERANCE)
+            || self.is_empty()
+            || other.is_empty()
+        {
+            return false;
+        }
+        PreparedShell::new(self).intersects(&PreparedShell::new(other))
+    }
+
+    /// Euclidean distance between the shells (0 when they intersect), by parry2d's GJK, which
+    /// stops when its bounds agree to ~0.35% (relative) — meant for gating, not measuring;
+    /// `f64::INFINITY` when either is empty.
+    pub fn distance(&self, other: &ConvexShell) -> f64 {
+        PreparedShell::new(self).distance(&PreparedShell::new(other))
+    }
+}
+
 /// How far inside a shell, in pixels, a point must lie for [`PreparedShell::intersects_fast`]
 /// to accept a pair without GJK: far above parry's f32 rounding on the shells' local
 /// coordinates (~1e-4 px at a few thousand pixels), far below a pixel.

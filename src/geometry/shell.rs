@@ -9,7 +9,6 @@
 use serde::{Deserialize, Serialize};
 use spade::{DelaunayTriangulation, Point2, Triangulation};
 
-use super::gjk::PreparedShell;
 use super::GeometryError;
 use crate::frame::{BBox, Mask, Point};
 use crate::runs::{first_nonzero, last_nonzero};
@@ -357,25 +356,6 @@ impl ConvexShell {
             }
         }
         best.map(|(_, v)| v)
-    }
-
-    /// Whether the two closed shells intersect (touching counts, up to f32 rounding), by
-    /// parry2d's GJK after a bounding-box early-out. Empty shells intersect nothing.
-    pub fn intersects(&self, other: &ConvexShell) -> bool {
-        if !aabbs_overlap(&self.aabb(), &other.aabb(), TOUCH_TOLERANCE)
-            || self.is_empty()
-            || other.is_empty()
-        {
-            return false;
-        }
-        PreparedShell::new(self).intersects(&PreparedShell::new(other))
-    }
-
-    /// Euclidean distance between the shells (0 when they intersect), by parry2d's GJK, which
-    /// stops when its bounds agree to ~0.35% (relative) — meant for gating, not measuring;
-    /// `f64::INFINITY` when either is empty.
-    pub fn distance(&self, other: &ConvexShell) -> f64 {
-        PreparedShell::new(self).distance(&PreparedShell::new(other))
     }
 }
 

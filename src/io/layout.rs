@@ -7,8 +7,8 @@
 //! `gt/gt.txt` is a sequence, in name order.
 
 use super::motchallenge::{parse_mot_with, parse_mots, MotReadOptions, SeqInfo};
+use super::sequence::{Origin, SequenceInput};
 use super::{read_text, IoError, Record};
-use crate::eval::{Origin, SequenceInput};
 use std::path::{Path, PathBuf};
 
 /// One ground-truth sequence found on disk.

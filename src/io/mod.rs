@@ -16,6 +16,7 @@ pub mod motchallenge;
 pub mod png_masks;
 pub mod rle;
 pub mod scalabel;
+pub mod sequence;
 pub mod vot;
 pub mod yolo;
 

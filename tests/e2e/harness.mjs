@@ -158,7 +158,7 @@ export function watchErrors(page) {
   page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
   page.on('console', (m) => {
     if (m.type() === 'error') errors.push(`console: ${m.text()}`);
-    // E2E_CONSOLE=1: every console line of the page (a hung step's last words).
+    // E2E_CONSOLE=FILE: every console line of the page appended to FILE (a hung step's last words).
     if (process.env.E2E_CONSOLE) appendFileSync(process.env.E2E_CONSOLE, `${new Date().toISOString()} [console ${m.type()}] ${m.text()}\n`);
   });
   if (process.env.E2E_CONSOLE) page.on('worker', (w) => appendFileSync(`${process.env.E2E_CONSOLE}`, `${new Date().toISOString()} [worker] ${w.url()}\n`));
