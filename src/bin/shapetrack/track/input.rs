@@ -1,0 +1,222 @@
+//! The detection file of `shapetrack track`: MOT, MOTS or Scalabel told apart by content, a
+//! text file checked in a first pass, then read one frame's records at a time.
+
+use shapetrack::io::motchallenge::{parse_mot_line, parse_mots_line, MotReadOptions};
+use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, Categories};
+use shapetrack::io::{IoError, Record};
+use std::path::{Path, PathBuf};
+
+/// Whether a detection file is MOTS: its first line has six whitespace-separated fields, no
+/// comma, and a sixth field that is not a number (an RLE string).
+pub(super) fn is_mots(text: &str) -> bool {
+    let Some(line) = text.lines().map(str::trim).find(|l| !l.is_empty()) else {
+        return false;
+    };
+    let f: Vec<&str> = line.split_whitespace().collect();
+    !line.contains(',') && f.len() == 6 && f[5].parse::<f64>().is_err()
+}
+
+/// Whether a detection file is JSON (Scalabel): its first non-blank character opens a list or
+/// an object.
+pub(super) fn is_json(text: &str) -> bool {
+    matches!(text.trim_start().chars().next(), Some('[' | '{'))
+}
+
+/// The detections of one video of a Scalabel file (`video`, or the file's only one), its name
+/// and the category table its classes refer to.
+pub(super) fn scalabel_detections(
+    text: &str,
+    file: &str,
+    video: Option<&str>,
+) -> Result<(String, Vec<Record>, Categories), Box<dyn std::error::Error>> {
+    let mut videos = split_videos(parse_scalabel(text, file)?);
+    let name = match video {
+        Some(v) => v.to_string(),
+        None if videos.len() == 1 => videos.keys().next().cloned().unwrap_or_default(),
+        None => {
+            let names: Vec<&String> = videos.keys().collect();
+            return Err(format!(
+                "{file} holds {} videos ({names:?}): choose one with --video",
+                videos.len()
+            )
+            .into());
+        }
+    };
+    let frames = videos
+        .remove(&name)
+        .ok_or_else(|| format!("{file}: no video named {name:?}"))?;
+    let mut cats = Categories::default();
+    let mut records =
+        scalabel::to_records(&frames, &mut scalabel::IdMap::default(), &mut cats, false);
+    // Detections carry no identity; the tracker gives them one.
+    for r in &mut records {
+        r.id = -1;
+    }
+    Ok((name, records, cats))
+}
+
+/// What a first pass over a MOT/MOTS text file found, without keeping its records.
+pub(super) struct Scan {
+    /// Whether frame numbers never decrease from line to line (then the tracker reads the
+    /// file again line by line while it runs, and memory stays flat over any length).
+    pub(super) sorted: bool,
+    pub(super) records: usize,
+    pub(super) first_frame: Option<u32>,
+    pub(super) last_frame: u32,
+    /// The image size of the first mask (MOTS).
+    pub(super) mask_size: Option<(u32, u32)>,
+}
+
+pub(super) fn open_lines(
+    path: &Path,
+) -> Result<std::io::Lines<std::io::BufReader<std::fs::File>>, IoError> {
+    use std::io::BufRead as _;
+    let f = std::fs::File::open(path).map_err(|source| IoError::Io {
+        file: path.display().to_string(),
+        source,
+    })?;
+    Ok(std::io::BufReader::new(f).lines())
+}
+
+/// Reads line `ln` of a text detection file (I/O errors name the file).
+pub(super) fn line_of(
+    line: Option<std::io::Result<String>>,
+    path: &Path,
+) -> Result<Option<String>, IoError> {
+    line.transpose().map_err(|source| IoError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+fn parse_line(raw: &str, file: &str, ln: usize, mots: bool) -> Result<Option<Record>, IoError> {
+    if mots {
+        parse_mots_line(raw, file, ln)
+    } else {
+        parse_mot_line(raw, file, ln, MotReadOptions::default())
+    }
+}
+
+/// Checks every line of a MOT/MOTS file (so a bad line fails before anything is written) and
+/// notes what the run needs to know up front.
+pub(super) fn scan(
+    path: &Path,
+    mots: bool,
+    image_size: Option<(u32, u32)>,
+) -> Result<Scan, IoError> {
+    let file = path.display().to_string();
+    let mut lines = open_lines(path)?;
+    let mut scan = Scan {
+        sorted: true,
+        records: 0,
+        first_frame: None,
+        last_frame: 0,
+        mask_size: None,
+    };
+    let mut prev = 0u32;
+    let mut ln = 0usize;
+    while let Some(raw) = line_of(lines.next(), path)? {
+        ln += 1;
+        let Some(r) = parse_line(&raw, &file, ln, mots)? else {
+            continue;
+        };
+        check_mask_size(&r, image_size, &file, ln)?;
+        if scan.records > 0 && r.frame < prev {
+            scan.sorted = false;
+        }
+        prev = r.frame;
+        scan.records += 1;
+        scan.first_frame = Some(scan.first_frame.map_or(r.frame, |f| f.min(r.frame)));
+        scan.last_frame = scan.last_frame.max(r.frame);
+        if scan.mask_size.is_none() {
+            scan.mask_size = r.mask.as_ref().map(|m| (m.width, m.height));
+        }
+    }
+    Ok(scan)
+}
+
+/// A mask must be of the frame it belongs to (the seqinfo's size when given).
+pub(super) fn check_mask_size(
+    r: &Record,
+    image_size: Option<(u32, u32)>,
+    file: &str,
+    line: usize,
+) -> Result<(), IoError> {
+    if let (Some(m), Some((w, h))) = (&r.mask, image_size) {
+        if (m.width, m.height) != (w, h) {
+            return Err(IoError::Invalid {
+                file: file.to_string(),
+                line,
+                message: format!(
+                    "a {}x{} mask in a {w}x{h} video (seqinfo): masks must be of the frame's size",
+                    m.width, m.height
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The detections, one frame's records at a time, in frame order.
+pub(super) enum Groups {
+    /// Held in memory, sorted by frame (Scalabel JSON, or a text file not sorted by frame).
+    Loaded { records: Vec<Record>, at: usize },
+    /// A text file sorted by frame, read line by line.
+    Stream {
+        lines: std::io::Lines<std::io::BufReader<std::fs::File>>,
+        path: PathBuf,
+        mots: bool,
+        ln: usize,
+        pending: Option<Record>,
+    },
+}
+
+impl Groups {
+    pub(super) fn loaded(mut records: Vec<Record>) -> Self {
+        records.sort_by_key(|r| r.frame);
+        Groups::Loaded { records, at: 0 }
+    }
+
+    /// The next frame's number and records.
+    pub(super) fn next_group(&mut self) -> Result<Option<(u32, Vec<Record>)>, IoError> {
+        match self {
+            Groups::Loaded { records, at } => {
+                let Some(first) = records.get(*at) else {
+                    return Ok(None);
+                };
+                let frame = first.frame;
+                let end = records[*at..]
+                    .iter()
+                    .position(|r| r.frame != frame)
+                    .map_or(records.len(), |k| *at + k);
+                let group = records[*at..end].to_vec();
+                *at = end;
+                Ok(Some((frame, group)))
+            }
+            Groups::Stream {
+                lines,
+                path,
+                mots,
+                ln,
+                pending,
+            } => {
+                let file = path.display().to_string();
+                let mut group: Vec<Record> = pending.take().into_iter().collect();
+                while let Some(raw) = line_of(lines.next(), path)? {
+                    *ln += 1;
+                    let Some(r) = parse_line(&raw, &file, *ln, *mots)? else {
+                        continue;
+                    };
+                    match group.first() {
+                        Some(g) if g.frame != r.frame => {
+                            *pending = Some(r);
+                            break;
+                        }
+                        _ => group.push(r),
+                    }
+                }
+                Ok(group.first().map(|g| g.frame).map(|f| (f, group)))
+            }
+        }
+    }
+}
