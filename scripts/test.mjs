@@ -54,6 +54,15 @@ const steps = [
     run: () =>
       sh('cargo', ['clippy', '--target', 'wasm32-unknown-unknown', '--lib', '--bins', '--tests', '--examples', '--', '-D', 'warnings']),
   },
+  // No file in src/ or www/src over 800 lines (scripts/check-layout.mjs).
+  { name: 'source layout', run: () => sh('node', ['scripts/check-layout.mjs']) },
+  {
+    // The crate's docs build without a warning (broken intra-doc links included); its
+    // top-level example runs as a doctest in `cargo test`.
+    name: 'cargo doc',
+    needs: ['setup'],
+    run: () => sh('cargo', ['doc', '--no-deps', '--lib'], { RUSTDOCFLAGS: '-D warnings' }),
+  },
   { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--no-fail-fast']) },
   {
     // The mutation fuzzer with overflow checks on (an overflow that wraps silently in release is

@@ -28,6 +28,18 @@
 //! - `grid` (native only): the robustness grid — datasets × detector models × trackers.
 //!
 //! The core never imports wasm-bindgen; the browser bindings live in `wasm` (wasm32 only).
+//!
+//! Online tracking in box mode (no image: the degenerate case of masks), one call per frame:
+//!
+//! ```
+//! use shapetrack::{track::{Config, Tracker}, BBox, Detection};
+//! let mut tracker = Tracker::new(Config::default())?;
+//! for x in [10.0, 14.0, 18.0, 22.0] {
+//!     let tracks = tracker.update(None, &[Detection::from_box(BBox::new(x, 20.0, 30.0, 60.0), 0.9)])?;
+//!     assert!(tracks.iter().all(|t| t.id == 1), "one walker, one identity");
+//! }
+//! # Ok::<(), shapetrack::track::TrackError>(())
+//! ```
 #![deny(missing_docs)]
 
 pub mod assign;

@@ -154,7 +154,7 @@ pub struct ColourCost {
     /// Which track appearance to compare.
     pub side: TrackSide,
     /// The term's gate (pairs above it are rejected), which lets
-    /// [`ColourMode::Contained`] screen pairs (see [`ColourCost::screened`]).
+    /// [`ColourMode::Contained`] screen pairs (see `ColourCost::screened`).
     pub gate: Option<f64>,
 }
 

@@ -20,9 +20,9 @@
 //!   geometry cannot decide.
 //! - **score pairs**: the [`CostModel`] combines the enabled [`PairCost`] terms per pair;
 //!   cluster-normalised terms (C1, C2) rank pairs, thresholds compare the others.
-//! - **associate** ([`super::associate`]): the stages [`stages`] builds from the config, run
-//!   in turn, each an optimal assignment; the re-identification stage scores its pairs when
-//!   its turn comes (describing its detections then).
+//! - **associate** ([`super::associate`]): the stages [`super::associate::stages`] builds
+//!   from the config, run in turn, each an optimal assignment; the re-identification stage
+//!   scores its pairs when its turn comes (describing its detections then).
 //! - **merge fragments** (`fragments`): a detector-split shape is put back together.
 //! - **update matched**: `Track::hit` for every match (amodal completion, filter, sizes,
 //!   appearance; not the filter for a view merged with a neighbour's, `fragments`); tentative

@@ -2,7 +2,7 @@
 //! (a fixed-interval Rauch–Tung–Striebel smoother), as far as the sequence's own detections
 //! show that smoothing helps.
 //!
-//! The online tracker reports a box smoothed only by the past ([`super::super::estimate`]): a
+//! The online tracker reports a box smoothed only by the past (`estimate`): a
 //! causal filter lags behind a turn or a change of size, so it is chosen only where the
 //! detector's noise outweighs that lag. With the whole sequence known, the estimate at frame
 //! `t` also uses the detections after it and lags behind nothing. Per sequence and coordinate
@@ -10,7 +10,7 @@
 //!
 //! - every run of consecutive observed frames of a track (at least [`SmoothConfig::min_run`])
 //!   is smoothed by a bank of local-linear-trend smoothers that differ only in the ratio of
-//!   process to measurement noise (the online bank's [`RATIOS`], noise proportional to the
+//!   process to measurement noise (the online bank's `RATIOS`, noise proportional to the
 //!   box size);
 //! - the ratio is chosen by leave-one-out cross-validation: how well the smoother predicts
 //!   each detection from all the others, which for a linear smoother is the residual
