@@ -5,9 +5,9 @@
 // taken; masks expire some frames after they arrive; a frame with
 // nothing to carry goes through untouched; shifted masks are clipped to the frame.
 
-import { test } from 'node:test';
+import { after, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { AGREE_IOU, CARRY_FRAMES, LearnedKeyframes, REGION_FRAMES, maskIou, shiftMask } from '../src/worker/learned.js';
+import { AGREE_IOU, CARRY_FRAMES, IDLE_THREADS, LearnedKeyframes, REGION_FRAMES, maskIou, shiftMask, wantedThreads } from '../src/worker/learned.js';
 
 /**
  * @typedef {{ bbox: { x: number, y: number, w: number, h: number }, mask?: any, score: number, class: number }} Det
@@ -65,6 +65,7 @@ const det = (x, y, w, h) => ({ bbox: { x, y, w, h }, mask: full(x, y, w, h), sco
 test('a learned mask is carried shifted by its detection\'s displacement and takes its place', () => {
   const core = fakeCore();
   const lk = new LearnedKeyframes(core, 200, 100);
+  after(() => lk.dispose());
   // Keyframe 10: a detection at (20, 20, 40, 30); the net's outline of it is smaller.
   const learned = { bbox: { x: 25, y: 22, w: 30, h: 26 }, mask: full(25, 22, 30, 26), score: 0.8, class: -1 };
   lk.result = { frame: 10, arrived: -1, inputs: [{ x: 20, y: 20, w: 40, h: 30 }], learned: [learned] };
@@ -82,6 +83,7 @@ test('a learned mask is carried shifted by its detection\'s displacement and tak
 test('a proposed region no detection matches is added for a while; masks expire after they arrive', () => {
   const core = fakeCore();
   const lk = new LearnedKeyframes(core, 200, 100);
+  after(() => lk.dispose());
   const region = { bbox: { x: 150, y: 10, w: 20, h: 20 }, mask: full(150, 10, 20, 20), score: 0.6, class: -1 };
   lk.result = { frame: 5, arrived: -1, inputs: [], learned: [region] };
   const a = lk.apply(40, core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] }));
@@ -102,6 +104,7 @@ test('a proposed region no detection matches is added for a while; masks expire 
 test('a carried mask that disagrees with the detection\'s own (IoU < AGREE_IOU) is not taken', () => {
   const core = fakeCore();
   const lk = new LearnedKeyframes(core, 200, 100);
+  after(() => lk.dispose());
   // The learned outline covers under half of the detection's mask: stale, or another object.
   lk.result = { frame: 1, arrived: -1, inputs: [{ x: 0, y: 0, w: 40, h: 40 }], learned: [det(0, 0, 28, 28)] };
   const now = core.Detections.fromLists({ masks: [full(0, 0, 40, 40)] });
@@ -115,6 +118,7 @@ test('a carried mask that disagrees with the detection\'s own (IoU < AGREE_IOU) 
 test('no keyframe result: the detections go through untouched', () => {
   const core = fakeCore();
   const lk = new LearnedKeyframes(core, 200, 100);
+  after(() => lk.dispose());
   const d = core.Detections.fromLists({ masks: [full(0, 0, 4, 4)] });
   const r = lk.apply(1, d);
   assert.equal(r.dets, d);
@@ -131,4 +135,18 @@ test('a shifted mask is clipped to the frame, or gone when it leaves it', () => 
   assert.equal(shiftMask(m, 20, 0, 10, 10), null);
   const u = shiftMask(m, 2, 3, 10, 10);
   assert.equal(u?.data, m.data, 'inside the frame: the same bytes, moved');
+});
+
+test('the net has every core while only drawn boxes use it, one thread while keyframes run beside the tracker', () => {
+  assert.equal(IDLE_THREADS, 2);
+  assert.equal(wantedThreads(), IDLE_THREADS, 'no keyframes: a drawn box is all the worker does');
+  const core = /** @type {any} */ (fakeCore());
+  const a = new LearnedKeyframes(core, 64, 48);
+  const b = new LearnedKeyframes(core, 64, 48);
+  assert.equal(wantedThreads(), 1);
+  a.dispose();
+  a.dispose(); // twice: counted once
+  assert.equal(wantedThreads(), 1, 'one stage still runs');
+  b.dispose();
+  assert.equal(wantedThreads(), IDLE_THREADS);
 });

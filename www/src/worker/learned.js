@@ -35,11 +35,30 @@ import { INPUT_LENGTH, SegmenterError } from './segmenter/contract.js';
 let client = null;
 
 /**
+ * Threads the net asks for while the detector's keyframes are off: a drawn box's outline is
+ * all the worker does then (the tracker waits for it), so the net may have every core of a
+ * 2-core machine. With keyframes on, one: they run beside the tracker, and two threads there
+ * lost to one (www/README.md, bench:segmenter under load).
+ */
+export const IDLE_THREADS = 2;
+
+/** Keyframe stages alive in this worker (each takes the net down to one thread). */
+let keyframeUsers = 0;
+
+/** Threads the net should have now (exported for the unit tests). */
+export function wantedThreads() {
+  return keyframeUsers > 0 ? 1 : IDLE_THREADS;
+}
+
+/**
  * The segmenter, shared by the box masks and the detector's keyframes (one net, one worker,
- * loaded once). One thread: the tracker worker has the other core.
+ * loaded once per thread count). When the wanted thread count changed (keyframes turned on or
+ * off) and nothing is pending on it, the old one is dropped and the next use loads anew (from
+ * the service worker's cache: ~2 s, once per switch).
  */
 function segmenter() {
-  client ??= new SegmenterClient({ threads: 1 });
+  if (client && client.threads !== wantedThreads() && client.pending.size === 0) forgetSegmenter();
+  client ??= new SegmenterClient({ threads: wantedThreads() });
   return client;
 }
 
@@ -365,6 +384,7 @@ export class LearnedKeyframes {
     /** @type {string | null} */
     this.failed = null;
     this.disposed = false;
+    keyframeUsers++;
   }
 
   /** @returns {LearnedState} */
@@ -507,6 +527,7 @@ export class LearnedKeyframes {
 
   /** Stops using the net (a keyframe under way finishes unseen) and frees the frame copy. */
   dispose() {
+    if (!this.disposed) keyframeUsers--;
     this.disposed = true;
     const copy = this.copy;
     this.copy = null;
