@@ -89,7 +89,8 @@ const steps = [
   { name: 'js unit tests', needs: ['setup'], run: () => sh('node', ['--test', 'www/test/']) },
   // The built package's JS API under hostile calls (Errors, never traps), in Node.
   { name: 'wasm api (node)', needs: ['build wasm'], run: () => sh('node', ['--test', 'tests/wasm-node/']) },
-  // The npm library: packed, installed offline in an empty folder, its README example run there.
+  // The npm library: packed, installed offline in an empty folder, its README example run there,
+  // its types checked and its type docs (TypeDoc) built without a warning.
   { name: 'library package (node)', needs: ['build wasm'], run: () => sh('node', ['--test', 'tests/lib/']) },
   {
     name: 'js type check',

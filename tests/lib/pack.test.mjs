@@ -1,7 +1,7 @@
 // The npm library: `npm run pack:lib -- DEST` writes exactly one shapetrack-<version>.tgz, the
 // tarball installs into an empty folder with no network, the README's embedding (which is
 // examples/embed-node.mjs, byte for byte) runs there by package name and exits 0, and the
-// package's TypeScript types check for a consumer.
+// package's TypeScript types check for a consumer, and its type docs (TypeDoc) build without a warning.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -75,6 +75,27 @@ test('pack, install offline in an empty folder, run the README embedding, check 
   writeFileSync(join(app, 'bad.ts'), "import { Tracker } from 'shapetrack';\nnew Tracker({ min_hits: 'three' });\n");
   const bad = sh(tsc, ['--noEmit', '--strict', '--target', 'es2022', '--module', 'nodenext', '--moduleResolution', 'nodenext', '--lib', 'es2022,esnext.disposable,dom', 'bad.ts'], app);
   assert.notEqual(bad.status, 0, 'a config field of the wrong type is rejected');
+
+  // The package's type docs (TypeDoc over both entry points, as installed) build without a
+  // warning: every {@link} resolves and every type a signature names is exported.
+  const typedoc = join(ROOT, 'node_modules', '.bin', 'typedoc');
+  const tdConfig = (/** @type {string[]} */ files) =>
+    JSON.stringify({
+      compilerOptions: { strict: true, target: 'es2022', module: 'nodenext', moduleResolution: 'nodenext', lib: ['es2022', 'esnext.disposable', 'dom'], noEmit: true },
+      files,
+    });
+  const docArgs = (/** @type {string} */ config, /** @type {string[]} */ entries) => [
+    '--tsconfig', config, ...entries.flatMap((e) => ['--entryPoints', e]), '--emit', 'none', '--treatWarningsAsErrors', '--disableSources',
+  ];
+  const entries = ['node_modules/shapetrack/index.d.ts', 'node_modules/shapetrack/worker.d.ts'];
+  writeFileSync(join(app, 'tsconfig.docs.json'), tdConfig(entries));
+  const docs = sh(typedoc, docArgs('tsconfig.docs.json', entries), app);
+  assert.equal(docs.status, 0, docs.stdout + docs.stderr);
+  // A broken link is a failure, so the check above means something.
+  writeFileSync(join(app, 'broken.d.ts'), '/** See {@link NoSuchThing}. */\nexport declare function f(): void;\n');
+  writeFileSync(join(app, 'tsconfig.broken.json'), tdConfig(['broken.d.ts']));
+  const broken = sh(typedoc, docArgs('tsconfig.broken.json', ['broken.d.ts']), app);
+  assert.notEqual(broken.status, 0, 'a broken {@link} fails the type docs');
 });
 
 test('the README shows the tested embedding, byte for byte', () => {
