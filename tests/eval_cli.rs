@@ -144,3 +144,50 @@ fn cli_seq_selection_and_flat_layout() {
         "{stderr}"
     );
 }
+
+/// Copies a folder tree (a fixture into a scratch place the test may damage).
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let dest = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &dest);
+        } else {
+            std::fs::copy(e.path(), dest).unwrap();
+        }
+    }
+}
+
+#[test]
+fn json_over_a_file_the_run_reads_is_refused_and_the_file_kept() {
+    let dir =
+        std::env::temp_dir().join(format!("shapetrack-eval-cli-{}-inputs", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    copy_tree(&fixture("mot20"), &dir);
+    let tracker = dir.join("trackers/MOT20-train/test/data");
+    let gt_file = dir.join("gt/MOT20-train/MOT20-A/gt/gt.txt");
+    let results = tracker.join("MOT20-A.txt");
+    for target in [&results, &gt_file] {
+        let before = std::fs::read(target).unwrap();
+        let (_, stderr, ok) = run(&[
+            "--gt".as_ref(),
+            dir.join("gt").as_os_str(),
+            "--tracker".as_ref(),
+            tracker.as_os_str(),
+            "--benchmark".as_ref(),
+            "MOT20".as_ref(),
+            "--json".as_ref(),
+            target.as_os_str(),
+        ]);
+        assert!(!ok, "--json {} was accepted", target.display());
+        assert!(stderr.contains("is an input of this run"), "{stderr}");
+        assert_eq!(
+            std::fs::read(target).unwrap(),
+            before,
+            "{} changed",
+            target.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

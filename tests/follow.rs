@@ -412,6 +412,26 @@ fn cli_writes_mots_that_reads_back_and_refuses_bad_input() {
         assert!(err.contains(expect), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+    // --out over a file the run reads (the initial mask, a frame) is refused, the file kept.
+    let frame3 = frames.join("003.png");
+    for target in [&init, &frame3] {
+        let before = std::fs::read(target).unwrap();
+        let t = s(target);
+        let res = follow_cli(&[
+            "--frames",
+            &fr,
+            "--init",
+            &ini,
+            "--init-frame",
+            "3",
+            "--out",
+            &t,
+        ]);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(!res.status.success(), "--out {t} succeeded");
+        assert!(err.contains("is an input of this run"), "{err}");
+        assert_eq!(std::fs::read(target).unwrap(), before, "{t} changed");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

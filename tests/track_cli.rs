@@ -358,6 +358,21 @@ fn outputs_never_destroy_inputs_or_old_results() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("is an input"), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(&det).unwrap(), text);
+    // --joins naming --out (neither written yet) is refused: the second write would replace
+    // the first.
+    let (out1, joins1) = (dir.join("o.txt"), dir.join(".").join("o.txt"));
+    let o = track(&[
+        "--det",
+        s(&det),
+        "--offline",
+        "--out",
+        s(&out1),
+        "--joins",
+        s(&joins1),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("are the same file"), "{}", stderr(&o));
+    assert!(!out1.exists());
     // A run that fails after the output was opened leaves the old result as it was: a
     // config error is found before tracking, a bad line half way is found by the first pass.
     let out = dir.join("out.txt");

@@ -78,3 +78,52 @@ fn eval_vot_cli_reproduces_toolkit_numbers() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no result file"));
 }
+
+#[test]
+fn json_over_a_file_the_run_reads_is_refused_and_the_file_kept() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir =
+        std::env::temp_dir().join(format!("shapetrack-eval-vot-{}-inputs", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("results")).unwrap();
+    std::fs::copy(
+        format!("{root}/../shared/data/vot-bag/groundtruth.txt"),
+        dir.join("groundtruth.txt"),
+    )
+    .unwrap();
+    for e in std::fs::read_dir(format!("{root}/tests/data/vot/results/constant/baseline")).unwrap()
+    {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.join("results").join(e.file_name())).unwrap();
+    }
+    let anchors = dir.join("anchor.value");
+    std::fs::copy(format!("{root}/tests/data/vot/bag_anchor.value"), &anchors).unwrap();
+    let gt = dir.join("groundtruth.txt");
+    let result = dir.join("results/bag_00000050.txt");
+    for target in [&gt, &anchors, &result] {
+        let before = std::fs::read(target).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_shapetrack"))
+            .args(["eval-vot", "--gt"])
+            .arg(&dir)
+            .arg("--tracker")
+            .arg(dir.join("results"))
+            .args(["--sequence", "bag", "--size", "480x360", "--json"])
+            .arg(target)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success(),
+            "--json {} was accepted",
+            target.display()
+        );
+        assert!(stderr.contains("is an input of this run"), "{stderr}");
+        assert_eq!(
+            std::fs::read(target).unwrap(),
+            before,
+            "{} changed",
+            target.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

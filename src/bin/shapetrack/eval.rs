@@ -4,7 +4,7 @@
 //! [--seq S ...] [--masks] [--json FILE]`; other tools rely on exactly these flags.
 
 use shapetrack::eval::{evaluate, EvalConfig, MotSummary, Preprocessing, Similarity, Summary};
-use shapetrack::io::layout::{discover, load_sequence, Format};
+use shapetrack::io::layout::{discover, load_sequence, results_file, Format};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -105,6 +105,21 @@ pub fn run(args: Args) -> crate::CliResult {
     } else {
         Format::Mot
     };
+    if let Some(json) = &args.json {
+        // Never over a file this run reads (ground truth, seqinfo, results).
+        let read: Vec<PathBuf> = layout
+            .sequences
+            .iter()
+            .flat_map(|e| {
+                [
+                    e.gt_file.clone(),
+                    e.seqinfo_file.clone(),
+                    results_file(&args.tracker, &e.name),
+                ]
+            })
+            .collect();
+        crate::outputs::refuse_overwrite("--json", json, read.iter().map(PathBuf::as_path))?;
+    }
     let inputs = layout
         .sequences
         .iter()

@@ -104,6 +104,8 @@ pub fn run(args: Args) -> crate::CliResult {
         (args.gt.clone(), dir)
     };
     let gt = read_regions(&gt_file)?;
+    // Every file this run reads, so that --json never lands on one of them.
+    let mut read = vec![gt_file.clone()];
     if gt.is_empty() {
         return Err(format!("{}: no frames", gt_file.display()).into());
     }
@@ -133,7 +135,12 @@ pub fn run(args: Args) -> crate::CliResult {
                 p.exists().then_some(p)
             }) {
                 Some(p) => {
-                    parse_anchor_values(&shapetrack::io::read_text(&p)?, &p.display().to_string())?
+                    let a = parse_anchor_values(
+                        &shapetrack::io::read_text(&p)?,
+                        &p.display().to_string(),
+                    )?;
+                    read.push(p);
+                    a
                 }
                 None => anchors_every(gt.len(), args.anchor_spacing),
             };
@@ -154,6 +161,7 @@ pub fn run(args: Args) -> crate::CliResult {
                 ])
                 .ok_or_else(|| format!("no result file {name} in {}", args.tracker.display()))?;
                 runs.push(read_regions(&path)?);
+                read.push(path);
             }
             let s = evaluate_anchor_sequence(&gt, &anchors, &runs, &params)?;
             let sum = summarize_anchor(std::slice::from_ref(&s), &params)?;
@@ -214,6 +222,7 @@ pub fn run(args: Args) -> crate::CliResult {
                 args.tracker.clone()
             };
             let traj: Vec<Region> = read_regions(&path)?;
+            read.push(path);
             let s = evaluate_reset_sequence(&gt, &traj, &params)?;
             let sum = summarize_reset(std::slice::from_ref(&s), &params)?;
             println!(
@@ -247,6 +256,7 @@ pub fn run(args: Args) -> crate::CliResult {
         }
     };
     if let Some(p) = &args.json {
+        crate::outputs::refuse_overwrite("--json", p, read.iter().map(PathBuf::as_path))?;
         shapetrack::io::write_text(p, &serde_json::to_string_pretty(&report)?)?;
     }
     Ok(())

@@ -186,6 +186,20 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         .into());
     }
+    // Never over a file this run reads: a frame, the initial mask, the ground truth.
+    let gt_files = match &args.gt {
+        Some(d) => image_files(d)?,
+        None => Vec::new(),
+    };
+    crate::outputs::refuse_overwrite(
+        "--out",
+        &args.out,
+        files
+            .iter()
+            .chain(&gt_files)
+            .map(PathBuf::as_path)
+            .chain([args.init.as_path()]),
+    )?;
     let init = args.init_frame - 1;
     let first = read_rgb(&files[init])?;
     let (w, h) = first.dimensions();

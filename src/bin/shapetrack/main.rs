@@ -15,6 +15,7 @@ mod follow;
 #[cfg(not(target_arch = "wasm32"))]
 mod grid;
 mod netcache;
+mod outputs;
 mod synth;
 mod track;
 

@@ -25,7 +25,7 @@ use shapetrack::io::{
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase, RleHistory};
 use shapetrack::track::{detections_by_frame, to_records, Config, Preset, Tracker};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 /// Output file formats.
@@ -90,14 +90,6 @@ pub struct Args {
     pub preset: Option<Preset>,
 }
 
-/// Whether two paths name the same existing file.
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    }
-}
-
 /// The tracker of the run: online alone, or inside the offline one.
 enum Runner {
     Online(Box<Tracker>),
@@ -140,6 +132,9 @@ impl Runner {
 pub fn run(args: Args) -> crate::CliResult {
     let det_name = args.det.display().to_string();
     // Never write over an input: a typo in --out must not destroy the detections.
+    if let Some(joins) = &args.joins {
+        crate::outputs::refuse_same_output("--out", &args.out, "--joins", joins)?;
+    }
     let inputs = [
         Some(&args.det),
         args.config.as_ref(),
@@ -148,7 +143,7 @@ pub fn run(args: Args) -> crate::CliResult {
     ];
     for input in inputs.into_iter().flatten() {
         for out in std::iter::once(&args.out).chain(args.joins.as_ref()) {
-            if same_file(out, input) {
+            if crate::outputs::same_file(out, input) {
                 return Err(format!(
                     "{} is an input of this run: write the output somewhere else",
                     out.display()
