@@ -9,6 +9,7 @@
 
 pub mod coco_video;
 pub mod cvat;
+pub mod image_file;
 pub mod label_studio;
 pub mod layout;
 pub mod limits;
@@ -240,13 +241,9 @@ pub fn image_files(dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, IoE
 
 /// Reads an image file (PNG or JPEG) as RGB8; a file that cannot be read or decoded is an
 /// error naming it. What the commands that take a frame folder read each frame with.
+/// Its size is checked against the caps before it is decoded ([`image_file`]).
 pub fn read_rgb(path: &std::path::Path) -> Result<image::RgbImage, IoError> {
-    image::open(path)
-        .map(|i| i.to_rgb8())
-        .map_err(|e| IoError::Image {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })
+    image_file::read_image(path, None).map(|i| i.to_rgb8())
 }
 
 /// Compares names as people number files: runs of digits by value, the rest by character.

@@ -113,8 +113,14 @@ pub fn decode_png_masks(
     file: &str,
     eight_bit: EightBit,
 ) -> Result<PngMaskFrame, IoError> {
-    let img = image::load_from_memory_with_format(bytes, ImageFormat::Png)
-        .map_err(|e| image_err(file, format!("not a readable PNG: {e}")))?;
+    let img = super::image_file::decode_image(bytes, Some(ImageFormat::Png), file, None).map_err(
+        |e| match e {
+            IoError::Image { message, .. } => {
+                image_err(file, format!("not a readable PNG: {message}"))
+            }
+            other => other,
+        },
+    )?;
     let (width, height) = (img.width(), img.height());
     let rles = match &img {
         DynamicImage::ImageLuma16(buf) => rles_from_ids(width, height, buf.as_raw()),

@@ -115,12 +115,7 @@ fn name(m: Method) -> &'static str {
 }
 
 fn gt_mask(path: &Path) -> Result<Mask, Box<dyn std::error::Error>> {
-    let img = image::open(path)
-        .map_err(|e| IoError::Image {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })?
-        .to_luma8();
+    let img = shapetrack::io::image_file::read_image(path, None)?.to_luma8();
     let (w, h) = img.dimensions();
     let bits: Vec<u8> = img.as_raw().iter().map(|&v| (v > 127) as u8).collect();
     Ok(Mask::from_full(w, h, &bits)?)

@@ -96,8 +96,9 @@ fn frame_of(img: &RgbImage) -> Result<Frame<'_>, Box<dyn std::error::Error>> {
 
 /// Non-zero in any channel is target.
 fn read_mask_png(path: &Path, width: u32, height: u32) -> Result<Mask, Box<dyn std::error::Error>> {
-    let img = image::open(path)
-        .map_err(|e| format!("--init {}: {e}", path.display()))?
+    // The frame's size is checked in the header, before the mask is decoded.
+    let img = shapetrack::io::image_file::read_image(path, Some((width, height)))
+        .map_err(|e| format!("--init {e}"))?
         .to_rgb8();
     let bits: Vec<u8> = img
         .pixels()
