@@ -412,6 +412,48 @@ fn cli_writes_mots_that_reads_back_and_refuses_bad_input() {
         assert!(err.contains(expect), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+    // A 16-bit initial mask whose target is id 1 (as instance maps store it) keeps every
+    // pixel: written back unchanged at its own frame.
+    let init16 = dir.join("init16.png");
+    let full = truth[2].to_full(W, H);
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(
+        W,
+        H,
+        full.iter().map(|&v| u16::from(v)).collect::<Vec<_>>(),
+    )
+    .unwrap()
+    .save(&init16)
+    .unwrap();
+    let out16 = dir.join("track16.txt");
+    let res = follow_cli(&[
+        "--frames",
+        &fr,
+        "--init",
+        &s(&init16),
+        "--init-frame",
+        "3",
+        "--out",
+        &s(&out16),
+        "--model",
+        "none",
+    ]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let recs = parse_mots(&std::fs::read_to_string(&out16).unwrap(), "track16.txt").unwrap();
+    let at_init = recs
+        .iter()
+        .find(|r| r.frame == 3)
+        .unwrap()
+        .mask_bitmap()
+        .unwrap();
+    assert_eq!(
+        at_init.area(),
+        truth[2].area(),
+        "every pixel of the 16-bit mask kept"
+    );
     // --out over a file the run reads (the initial mask, a frame) is refused, the file kept.
     let frame3 = frames.join("003.png");
     for target in [&init, &frame3] {

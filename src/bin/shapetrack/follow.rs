@@ -99,7 +99,8 @@ fn read_mask_png(path: &Path, width: u32, height: u32) -> Result<Mask, Box<dyn s
     // The frame's size is checked in the header, before the mask is decoded.
     let img = shapetrack::io::image_file::read_image(path, Some((width, height)))
         .map_err(|e| format!("--init {e}"))?
-        .to_rgb8();
+        // 16 bits a channel: an 8-bit conversion would round ids 1…127 of a 16-bit mask to 0.
+        .to_rgb16();
     let bits: Vec<u8> = img
         .pixels()
         .map(|p| u8::from(p.0.iter().any(|&v| v != 0)))
