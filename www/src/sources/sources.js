@@ -129,10 +129,12 @@ export async function videoSource(video, file) {
         // compositor: on a busy machine Chromium can still hand createImageBitmap the frame
         // shown before the seek (a backward follow then saw one picture over and over). The
         // video-frame callback fires once the new frame is presented; the timeout keeps a
-        // browser that skips it for a paused, hidden element from stalling. The price is a
+        // browser that skips it for a paused, hidden element from stalling. 2 s, not 500 ms:
+        // beside a Rust build a backward follow in the e2e suite once saw frame 16 on every
+        // frame again (the presentation, it seems, came after 500 ms). The price is a
         // display frame per seek (headless Chromium: ~16.7 ms against ~4 ms), so a video file
         // is read at up to ~60 frames a second: wrong pixels are worse than a slower read.
-        const presented = framePresented(video, 500);
+        const presented = framePresented(video, 2000);
         const seeked = once(video, 'seeked');
         video.currentTime = t;
         await seeked;
