@@ -68,14 +68,9 @@ pub fn decode_image(
     file: &str,
     expect: Option<(u32, u32)>,
 ) -> Result<DynamicImage, IoError> {
-    let reader = ImageReader::new(Cursor::new(bytes));
     let reader = match format {
-        Some(f) => {
-            let mut r = reader;
-            r.set_format(f);
-            r
-        }
-        None => reader
+        Some(f) => ImageReader::with_format(Cursor::new(bytes), f),
+        None => ImageReader::new(Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| err(file, e.to_string()))?,
     };

@@ -369,10 +369,7 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         .into());
     }
-    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    };
+    let same = crate::outputs::same_file;
     if files.iter().any(|f| same(f, &args.out))
         || args.boxes.as_deref().is_some_and(|b| same(b, &args.out))
     {

@@ -164,6 +164,10 @@ async function loadModel() {
   const rt = await import('virtual:shapetrack-ssd');
   const base = new URL(rt.runtimeUrl, self.location.href).href;
   rt.setWasmPath(base);
+  // Fetched beside the runtime and the model, as before the load moved into its own scope.
+  const labelsText = fetchOk(new URL(rt.labelsUrl, self.location.href).href).then((r) => r.text());
+  // Awaited below; when the load fails first, its own failure must not go unhandled.
+  labelsText.catch(() => {});
   const model = await withoutSharedMemory(async () => {
     const { simd, multiThreading } = await rt.getWasmFeatures();
     if (multiThreading) {
@@ -176,7 +180,6 @@ async function loadModel() {
     ]);
     return withImportScripts(script, code, () => rt.loadTFLiteModel(weights, { numThreads: -1 }));
   });
-  const labelsText = await fetchOk(new URL(rt.labelsUrl, self.location.href).href).then((r) => r.text());
   const runner = model.modelRunner;
   const [input] = runner.getInputs();
   if (!input || input.shape !== `1,${INPUT},${INPUT},3` || input.dataType !== 'float32') {
@@ -188,7 +191,7 @@ async function loadModel() {
   if (boxes < 0 || scores < 0) {
     throw new Error(`SSD detector: unexpected model outputs ${outputs.map((o) => o.shape).join(' / ')}`);
   }
-  const labels = parseLabels(labelsText);
+  const labels = parseLabels(await labelsText);
   if (labels.length !== DECODE.numClasses) throw new Error(`SSD detector: ${labels.length} labels for ${DECODE.numClasses} classes`);
   return { runner, boxes, scores, labels, anchors: ssdAnchors() };
 }
