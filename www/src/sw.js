@@ -71,11 +71,16 @@ async function respond(req, url, event) {
   const lazy = path === null ? undefined : LAZY.find((p) => path.startsWith(p));
   const cache = await caches.open(lazy ? LAZY_CACHES[lazy] : CACHE);
   // A navigation (any query string) gets its page when it is precached (the app, the bench
-  // page), the app shell otherwise.
+  // page), the app shell otherwise. Vary is ignored: a server that answers `Vary: Origin`
+  // (vite preview does, as the README serves the app) would otherwise never match the page's
+  // module script and CSS, requested with an Origin header, against the copies the install
+  // stored without one, and the page came up unstyled and dead offline. Every cached file is
+  // this origin's and content-hashed or versioned, so no variant can be the wrong one.
+  const opts = { ignoreVary: true };
   const hit =
     req.mode === 'navigate'
-      ? ((await cache.match(req, { ignoreSearch: true })) ?? (await cache.match(new URL('./', scope).href)))
-      : await cache.match(req);
+      ? ((await cache.match(req, { ...opts, ignoreSearch: true })) ?? (await cache.match(new URL('./', scope).href, opts)))
+      : await cache.match(req, opts);
   if (hit) return hit;
   const res = await fetch(req);
   if (res.ok && res.type === 'basic') {
