@@ -138,6 +138,28 @@ test('offline mode tracks the whole sequence with a progress bar, then the offli
   await page.close();
 });
 
+test('the demo\'s scores leave with the demo: opening one\'s own frames clears the Scores card', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?speed=max`);
+  // The demo plays and is scored against its scene's ground truth.
+  await page.waitForFunction(() => document.querySelector('#metrics-body [data-metric="MOTA"] .v')?.textContent?.match(/\d/), undefined, { timeout: 60_000 });
+  assert.match(await page.locator('#metrics-src').textContent(), /scene ground truth/);
+  const files = readdirSync(BAG)
+    .filter((f) => f.endsWith('.jpg'))
+    .sort()
+    .slice(0, 5)
+    .map((f) => join(BAG, f));
+  await page.setInputFiles('#file-images', files);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().source?.kind === 'images');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  // No ground truth for these frames: no figures, no "vs scene ground truth".
+  assert.equal(await page.locator('#metrics-body [data-metric]').count(), 0, 'no scores left from the demo');
+  assert.equal(await page.locator('#metrics-src').textContent(), '');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

@@ -85,6 +85,7 @@ export async function openSource(app, src) {
     app.gtName = '';
   }
   app.scores = null;
+  app.panel.renderScores(null, app.gt ? app.gtName.replace(/^file /, '') : '');
   app.stage.resize(source.width, source.height);
   byId('empty').hidden = true;
   app.status(`${source.name}: ${source.width}×${source.height}${source.frames ? `, ${source.frames} frames` : ''} · core ${opened.version}`);

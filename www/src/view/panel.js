@@ -202,7 +202,14 @@ export class Panel {
    */
   renderScores(s, source) {
     this.metricsSrc.textContent = source ? `vs ${source}` : '';
-    if (!s) return;
+    if (!s) {
+      // A new source starts without scores: the last source's figures must not stay up as if
+      // they were this one's (issue 66: the demo's MOTA stayed on the user's own footage).
+      this.metrics.replaceChildren(
+        h('p', { class: 'muted' }, [source ? `Scores against ${source} appear as frames are tracked.` : 'Load ground truth (or run the demo) to see MOTA, IDF1 and HOTA live.']),
+      );
+      return;
+    }
     const pct = (/** @type {number} */ v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
     /** @type {Array<[string, string]>} */
     const cells = [
