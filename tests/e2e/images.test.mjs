@@ -160,6 +160,25 @@ test('the demo\'s scores leave with the demo: opening one\'s own frames clears t
   await page.close();
 });
 
+test('a folder pick opens the folder\'s frames and names the exports after it', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0&speed=max`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  assert.ok(await page.locator('#src-folder').isVisible(), 'Chromium has folder picks: the button shows');
+  // The whole folder: its frames, and files that are not frames (groundtruth.txt, …), skipped.
+  await page.setInputFiles('#file-folder', BAG);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.equal(st.source.kind, 'images');
+  assert.equal(st.frames, readdirSync(BAG).filter((f) => f.endsWith('.jpg')).length);
+  await page.selectOption('#export-format', 'mot');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+  assert.match(download.suggestedFilename(), /^vot-bag\./, 'the export is named after the folder, not "images"');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

@@ -35,12 +35,17 @@ export function bindControls(app) {
   click('empty-demo', () => app.openDemo());
   click('src-video', () => byId('file-video').click());
   click('src-images', () => byId('file-images').click());
+  // A folder pick (where the browser has one) opens a DAVIS or MOTChallenge folder in one go
+  // and names the exports after it; a pick of numbered files can only call them `images`.
+  if ('webkitdirectory' in HTMLInputElement.prototype) click('src-folder', () => byId('file-folder').click());
+  else byId('src-folder').hidden = true;
   click('src-webcam', () => app.openWebcam());
   click('import', () => byId('file-import').click());
   click('load-gt', () => byId('file-gt').click());
   click('export', () => app.download(/** @type {FormatId} */ (byId('export-format', HTMLSelectElement).value)));
   files('file-video', (f) => app.openVideo(f[0]));
   files('file-images', (f) => app.openImages(f));
+  files('file-folder', (f) => app.openImages(f));
   files('file-import', async (f) => app.importTracks(f[0].name, await f[0].text()));
   files('file-gt', async (f) => app.loadGroundTruth(f[0].name, await f[0].text()));
   click('play', () => app.togglePlay());
