@@ -62,7 +62,10 @@ pub enum MotionError {
     #[error("innovation covariance is not positive definite")]
     Singular,
     /// A filter parameter is out of range.
-    #[error("motion parameter {name} = {value}: {reason}")]
+    #[error(
+        "motion parameter {name} = {}: {reason}",
+        crate::settings::Short::of(.value)
+    )]
     InvalidParameter {
         /// Parameter name.
         name: &'static str,

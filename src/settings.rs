@@ -14,6 +14,41 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::Value;
 
+/// A number as error messages print it: at most six significant digits, integers whole.
+///
+/// A setting is often an `f32` (the detectors'), and `0.3_f32 as f64` prints as
+/// `0.30000001192092896`; a computed value as `0.30000000000000004`. Neither is what the person
+/// wrote, and both hide the point of the message. Very large and very small values use an
+/// exponent (`1e300`, not three hundred digits).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Short(pub f64);
+
+impl Short {
+    /// `Short` of a borrowed value (for error attributes, which see fields by reference).
+    pub fn of(v: &f64) -> Short {
+        Short(*v)
+    }
+}
+
+impl std::fmt::Display for Short {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if !v.is_finite() || v == 0.0 {
+            return write!(f, "{v}");
+        }
+        if v.fract() == 0.0 && v.abs() < 1e15 {
+            return write!(f, "{}", v as i64);
+        }
+        // Rounded to six significant digits, then the shortest text of the rounded value.
+        let r: f64 = format!("{v:.5e}").parse().unwrap_or(v);
+        if (1e-4..1e15).contains(&r.abs()) {
+            write!(f, "{r}")
+        } else {
+            write!(f, "{r:e}")
+        }
+    }
+}
+
 /// `patch` merged into `base`: objects field by field, anything else replaced (`null`
 /// included, which turns an optional section off).
 pub fn merge(base: &mut Value, patch: &Value) {
@@ -106,6 +141,21 @@ mod tests {
     struct Outer {
         x: u32,
         inner: Inner,
+    }
+
+    #[test]
+    fn numbers_print_short() {
+        let p = |v: f64| Short(v).to_string();
+        assert_eq!(p(0.3_f32 as f64), "0.3");
+        assert_eq!(p(0.1 + 0.2), "0.3");
+        assert_eq!(p(1.3_f32 as f64), "1.3");
+        assert_eq!(p(1048577.0), "1048577");
+        assert_eq!(p(-2.5), "-2.5");
+        assert_eq!(p(1e300), "1e300");
+        assert_eq!(p(1.5e-7), "1.5e-7");
+        assert_eq!(p(f64::NAN), "NaN");
+        assert_eq!(p(f64::NEG_INFINITY), "-inf");
+        assert_eq!(p(0.0), "0");
     }
 
     #[test]

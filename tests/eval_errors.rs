@@ -282,7 +282,9 @@ fn mots_overlapping_masks_and_bad_rle() {
     let gt = "1 2001 2 4 3 125ON\n";
     // Two tracker masks sharing pixels.
     let res = "1 1 2 4 3 125ON\n1 2 2 4 3 125ON\n";
-    let c = Case::new(gt, SEQINFO, Some(res));
+    // The seqinfo says the masks' size (masks of another size are refused first).
+    let seqinfo = "[Sequence]\nname=S\nframeRate=25\nseqLength=3\nimWidth=3\nimHeight=4\n";
+    let c = Case::new(gt, seqinfo, Some(res));
     let e = c.library("MOTS", true).unwrap_err();
     assert!(
         matches!(
@@ -297,7 +299,7 @@ fn mots_overlapping_masks_and_bad_rle() {
     assert!(c
         .cli_fails("MOTS", &["--masks"])
         .contains("S.txt:2: mask overlaps"));
-    let c = Case::new(gt, SEQINFO, Some("1 1 2 4 3 12\n"));
+    let c = Case::new(gt, seqinfo, Some("1 1 2 4 3 12\n"));
     assert!(c
         .cli_fails("MOTS", &["--masks"])
         .contains("S.txt:1: bad RLE mask"));

@@ -45,7 +45,10 @@ pub enum DetectError {
         height: u32,
     },
     /// A configuration value is out of range.
-    #[error("invalid detector setting {field} = {value}: {reason}")]
+    #[error(
+        "invalid detector setting {field} = {}: {reason}",
+        crate::settings::Short::of(.value)
+    )]
     InvalidConfig {
         /// The setting.
         field: &'static str,

@@ -91,7 +91,10 @@ pub enum SiftError {
         value: f32,
     },
     /// A configuration value is out of range.
-    #[error("invalid SIFT config: {field} = {value} ({reason})")]
+    #[error(
+        "invalid SIFT config: {field} = {} ({reason})",
+        crate::settings::Short::of(.value)
+    )]
     InvalidConfig {
         /// Field name in [`SiftConfig`].
         field: &'static str,

@@ -43,7 +43,10 @@ pub enum GeometryError {
         height: u32,
     },
     /// A configuration value is out of range.
-    #[error("invalid geometry config: {field} = {value} ({reason})")]
+    #[error(
+        "invalid geometry config: {field} = {} ({reason})",
+        crate::settings::Short::of(.value)
+    )]
     InvalidConfig {
         /// The offending field.
         field: &'static str,

@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::value::RawValue;
 use std::collections::{BTreeMap, BTreeSet};
 
-use super::limits::{MAX_PIXELS, MAX_SIDE};
+use super::limits::{id_message, id_ok, MAX_PIXELS, MAX_SIDE};
 
 /// One video of a COCO-video file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -399,6 +399,9 @@ pub fn parse_coco_video(text: &str, file: &str) -> Result<CocoVideoData, IoError
         let Some(id) = t.id else {
             return Err(ctx.err_at(raw, "annotation has no \"id\""));
         };
+        if !id_ok(id) {
+            return Err(ctx.err_at(raw, id_message(&id.to_string())));
+        }
         let Some(&vi) = index.get(&t.video_id) else {
             return Err(ctx.err_at(
                 raw,

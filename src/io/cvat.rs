@@ -40,7 +40,7 @@ const MAX_DEPTH: usize = 64;
 /// by frame, so an absurd frame number must not turn into billions of records.
 const MAX_FRAMES: u32 = super::limits::MAX_FRAME;
 
-use super::limits::{MAX_RECORDS, MAX_TOTAL_RUNS};
+use super::limits::{id_message, id_ok, MAX_RECORDS, MAX_TOTAL_RUNS};
 use super::rle::{bitmap_runs, for_each_run_pixel};
 
 /// Shapes and mask runs a file has expanded to so far.
@@ -523,6 +523,9 @@ pub fn parse_cvat(
                 .parse()
                 .map_err(|_| ctx.err(node.pos, format!("track id {s:?} is not an integer")))?
         };
+        if !id_ok(id) {
+            return Err(ctx.err(node.pos, id_message(&id.to_string())));
+        }
         if !ids.insert(id) {
             return Err(ctx.err(node.pos, format!("duplicate track id {id}")));
         }

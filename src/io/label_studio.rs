@@ -53,7 +53,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use serde_json::value::RawValue;
 use serde_json::{json, Value};
 
-use super::limits::{image_size_ok, MAX_FRAME, MAX_RECORDS};
+use super::limits::{id_message, id_ok, image_size_ok, MAX_FRAME, MAX_RECORDS};
 use super::{json_err, IoError, JsonCtx as Ctx, Record, RecordFlags};
 use crate::frame::BBox;
 
@@ -321,6 +321,9 @@ pub fn parse_label_studio(
         .map(|t| t.id.parse::<i64>().ok().filter(|i| *i >= 0))
         .collect();
     let mut seen = BTreeSet::new();
+    // Different region ids that read as the same number ("7", "07", "+7") would merge two
+    // regions into one track: refused, naming both.
+    let mut by_number: BTreeMap<i64, &str> = BTreeMap::new();
     let mut budget = 0u64;
     out.frames = tracks.iter().map(|t| t.frames_count).max().unwrap_or(0);
     for (k, t) in tracks.iter().enumerate() {
@@ -328,6 +331,19 @@ pub fn parse_label_studio(
             return Err(ctx.err_at(t.raw, format!("two regions with id {:?}", t.id)));
         }
         let id = numeric.as_ref().map_or(k as i64 + 1, |n| n[k]);
+        if let Some(first) = by_number.insert(id, &t.id) {
+            return Err(ctx.err_at(
+                t.raw,
+                format!(
+                    "region ids {first:?} and {:?} are both track {id}: give them different \
+                     numbers",
+                    t.id
+                ),
+            ));
+        }
+        if !id_ok(id) {
+            return Err(ctx.err_at(t.raw, id_message(&t.id)));
+        }
         let mut names = t.labels.clone();
         if let Some(more) = extra_labels.get(&t.id) {
             names.extend(more.iter().cloned());

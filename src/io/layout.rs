@@ -22,6 +22,9 @@ pub struct SeqEntry {
     pub seqinfo_file: PathBuf,
     /// `seqLength` from `seqinfo.ini`.
     pub num_frames: u32,
+    /// `imWidth` × `imHeight` from `seqinfo.ini`, when it gives them: every MOTS mask of the
+    /// sequence must be of this size.
+    pub image_size: Option<(u32, u32)>,
 }
 
 /// The ground-truth sequences of one benchmark split.
@@ -113,6 +116,8 @@ pub fn discover(gt_root: &Path, benchmark: &str, split: &str) -> Result<GtLayout
             gt_file,
             seqinfo_file,
             num_frames: info.seq_length,
+            image_size: (info.im_width > 0 && info.im_height > 0)
+                .then_some((info.im_width, info.im_height)),
         });
     }
     Ok(GtLayout {
@@ -230,9 +235,12 @@ pub fn load_sequence(
     allow_missing_results: bool,
 ) -> Result<SequenceInput, IoError> {
     let (gt, gt_origin) = read_records(&entry.gt_file, format, true)?;
+    check_mask_sizes(&gt, &gt_origin, entry)?;
     let res_file = results_file(results_root, &entry.name);
     let (results, results_origin) = if res_file.is_file() {
-        read_records(&res_file, format, false)?
+        let (results, origin) = read_records(&res_file, format, false)?;
+        check_mask_sizes(&results, &origin, entry)?;
+        (results, origin)
     } else if allow_missing_results {
         (
             Vec::new(),
@@ -256,6 +264,32 @@ pub fn load_sequence(
         gt_origin: Some(gt_origin),
         results_origin: Some(results_origin),
     })
+}
+
+/// Every mask of `records` is of the sequence's size (its seqinfo's `imWidth` × `imHeight`),
+/// refused naming the file and line otherwise: TrackEval would score masks of another size
+/// against each other without a word, though they cannot be of this video.
+fn check_mask_sizes(records: &[Record], origin: &Origin, entry: &SeqEntry) -> Result<(), IoError> {
+    let Some((w, h)) = entry.image_size else {
+        return Ok(());
+    };
+    for (k, r) in records.iter().enumerate() {
+        if let Some(m) = r.mask.as_ref().filter(|m| (m.width, m.height) != (w, h)) {
+            return Err(IoError::Invalid {
+                file: origin.file.clone(),
+                line: origin.lines.get(k).copied().unwrap_or(0),
+                message: format!(
+                    "a {}x{} mask in sequence {}, whose frames are {w}x{h} ({}): masks must be \
+                     of the frame's size",
+                    m.width,
+                    m.height,
+                    entry.name,
+                    entry.seqinfo_file.display()
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -35,3 +35,25 @@ pub fn image_size_ok(width: u64, height: u64) -> bool {
         && (1..=MAX_SIDE as u64).contains(&height)
         && width * height <= MAX_PIXELS
 }
+
+/// Largest track id (in magnitude) a file may use: 2⁵³. A JSON number is a double to
+/// JavaScript (the browser app, the npm library) and to many JSON tools, and above 2⁵³ a double
+/// cannot hold every integer: id 2⁵³ + 1 would come back as 2⁵³, silently merging two tracks.
+pub const MAX_ID: i64 = 1 << 53;
+
+/// Whether `id` is a track id the readers accept (within ±[`MAX_ID`]).
+pub fn id_ok(id: i64) -> bool {
+    id.unsigned_abs() <= MAX_ID as u64
+}
+
+/// What a reader expected where it found a track id beyond ±[`MAX_ID`].
+pub const ID_EXPECTED: &str =
+    "a track id within ±2^53 (beyond 2^53 a JSON or JavaScript number cannot hold it exactly)";
+
+/// The error message for a track id beyond ±[`MAX_ID`], `id` as the file wrote it.
+pub fn id_message(id: &str) -> String {
+    format!(
+        "track id {id} is beyond 2^53: a JSON or JavaScript number cannot hold it exactly (it \
+         would be read back as another id)"
+    )
+}

@@ -133,12 +133,27 @@ impl IoError {
     }
 }
 
-/// Reads a whole text file, naming the file in the error.
+/// Reads a whole text file, naming the file in the error. A leading UTF-8 byte-order mark
+/// is dropped: editors on Windows write one, and left in place it would be part of the first
+/// field (a MOT frame number that fails to parse, a JSON file taken for text).
 pub fn read_text(path: &std::path::Path) -> Result<String, IoError> {
-    std::fs::read_to_string(path).map_err(|source| IoError::Io {
+    let mut text = std::fs::read_to_string(path).map_err(|source| IoError::Io {
         file: path.display().to_string(),
         source,
-    })
+    })?;
+    if text.starts_with(BOM) {
+        text.drain(..BOM.len_utf8());
+    }
+    Ok(text)
+}
+
+/// The UTF-8 byte-order mark (U+FEFF) some editors put at the start of a text file.
+pub const BOM: char = '\u{feff}';
+
+/// `line` without a leading byte-order mark: for readers that take a file line by line rather
+/// than through [`read_text`] (its first line may start with one).
+pub fn strip_bom(line: &str) -> &str {
+    line.strip_prefix(BOM).unwrap_or(line)
 }
 
 /// The 1-based line and column (in characters) of byte `offset` of `text`, for error messages.

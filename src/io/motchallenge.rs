@@ -5,7 +5,7 @@
 //! TrackEval we accept commas or whitespace as separators, CRLF, blank lines and extra fields.
 //! MOTS lines are `frame id class height width rle` with a pycocotools-compressed RLE.
 
-use super::limits::{image_size_ok, MAX_FRAME, MAX_PIXELS, MAX_SIDE};
+use super::limits::{id_ok, image_size_ok, ID_EXPECTED, MAX_FRAME, MAX_PIXELS, MAX_SIDE};
 use super::{IoError, Record, RecordFlags, Rle};
 use crate::frame::BBox;
 use std::fmt::Write as _;
@@ -52,6 +52,24 @@ fn int(file: &str, line: usize, col: usize, s: &str, what: &str) -> Result<i64, 
             s,
         )),
     }
+}
+
+/// The track id of field 2, within ±2⁵³ (see [`super::limits::MAX_ID`]).
+fn track_id(file: &str, line: usize, s: &str) -> Result<i64, IoError> {
+    let id = match s.parse::<i64>() {
+        Ok(id) => id,
+        // An integer too long for i64 is still an id, only too large: say so.
+        Err(_) if is_digits(s.strip_prefix(['-', '+']).unwrap_or(s)) => i64::MAX,
+        Err(_) => int(file, line, 2, s, "track id")?,
+    };
+    if !id_ok(id) {
+        return Err(IoError::parse(file, line, 2, ID_EXPECTED, s));
+    }
+    Ok(id)
+}
+
+fn is_digits(s: &str) -> bool {
+    !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit())
 }
 
 /// How strictly [`parse_mot_with`] checks values.
@@ -121,7 +139,7 @@ pub fn parse_mot_line(
             f[0],
         ));
     }
-    let id = int(file, ln, 2, f[1], "track id")?;
+    let id = track_id(file, ln, f[1])?;
     let x = num(file, ln, 3, f[2], "box left")?;
     let y = num(file, ln, 4, f[3], "box top")?;
     let w = num(file, ln, 5, f[4], "box width")?;
@@ -222,7 +240,7 @@ pub fn parse_mots_line(raw: &str, file: &str, ln: usize) -> Result<Option<Record
             f[0],
         ));
     }
-    let id = int(file, ln, 2, f[1], "object id")?;
+    let id = track_id(file, ln, f[1])?;
     let class = int(file, ln, 3, f[2], "class id")? as i32;
     let h = int(file, ln, 4, f[3], "image height")?;
     let w = int(file, ln, 5, f[4], "image width")?;

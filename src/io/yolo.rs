@@ -40,7 +40,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-use super::limits::{image_size_ok, MAX_FRAME, MAX_RECORDS};
+use super::limits::{id_ok, image_size_ok, ID_EXPECTED, MAX_FRAME, MAX_RECORDS};
 use super::{IoError, Record};
 use crate::frame::BBox;
 
@@ -110,6 +110,9 @@ fn parse_object(
             let id: i64 = id_s.parse().ok().filter(|i| *i >= -1).ok_or_else(|| {
                 IoError::parse(file, line, first + n - 1, "a track id (integer ≥ −1)", id_s)
             })?;
+            if !id_ok(id) {
+                return Err(IoError::parse(file, line, first + n - 1, ID_EXPECTED, id_s));
+            }
             let score = if n == 7 {
                 let s = fields[5];
                 s.parse()

@@ -515,6 +515,10 @@ impl Default for Config {
     }
 }
 
+/// Largest [`Config::region_margin`] and [`Config::region_margin_per_miss`]: box sizes on
+/// each side.
+const MAX_MARGIN: f64 = 1000.0;
+
 fn check(field: &str, value: f64, ok: bool, reason: &'static str) -> Result<(), TrackError> {
     if ok && value.is_finite() {
         Ok(())
@@ -544,10 +548,22 @@ impl Config {
             self.min_hits >= 1,
             "must be ≥ 1",
         )?;
+        // A region a thousand box sizes wide on each side already reaches every detection of
+        // any frame; far larger margins (1e300) overflow the grown box to infinity.
         let m = self.region_margin;
-        check("region_margin", m, m >= 0.0, "must be ≥ 0")?;
+        check(
+            "region_margin",
+            m,
+            (0.0..=MAX_MARGIN).contains(&m),
+            "must be in [0, 1000]",
+        )?;
         let m = self.region_margin_per_miss;
-        check("region_margin_per_miss", m, m >= 0.0, "must be ≥ 0")?;
+        check(
+            "region_margin_per_miss",
+            m,
+            (0.0..=MAX_MARGIN).contains(&m),
+            "must be in [0, 1000]",
+        )?;
         for (field, v) in [
             ("max_cost", self.max_cost),
             ("max_cost_low", self.max_cost_low),
@@ -579,19 +595,43 @@ impl Config {
         }
         let f = self.frame_counts_at;
         check("frame_counts_at", f, f > 0.0, "must be > 0")?;
-        for (name, t) in self
-            .terms
-            .named()
-            .into_iter()
-            .chain(self.reid_terms.named())
-        {
-            let w = t.weight;
-            check(&format!("terms.{name}.weight"), w, w >= 0.0, "must be ≥ 0")?;
-            let s = t.scale;
-            check(&format!("terms.{name}.scale"), s, s > 0.0, "must be > 0")?;
-            if let Some(g) = t.gate {
-                check(&format!("terms.{name}.gate"), g, true, "must be finite")?;
+        for (section, terms) in [("terms", &self.terms), ("reid_terms", &self.reid_terms)] {
+            for (name, t) in terms.named() {
+                let w = t.weight;
+                check(
+                    &format!("{section}.{name}.weight"),
+                    w,
+                    w >= 0.0,
+                    "must be ≥ 0",
+                )?;
+                let s = t.scale;
+                check(
+                    &format!("{section}.{name}.scale"),
+                    s,
+                    s > 0.0,
+                    "must be > 0",
+                )?;
+                // Every term's cost is ≥ 0, so a negative gate refuses every pair.
+                if let Some(g) = t.gate {
+                    let field = format!("{section}.{name}.gate");
+                    check(
+                        &field,
+                        g,
+                        g >= 0.0,
+                        "must be ≥ 0 (costs are never negative)",
+                    )?;
+                }
             }
+        }
+        // With every weight 0 the main association scores no pair and no track is ever
+        // matched (re-identification may be off: its terms may all be 0).
+        if self.terms.named().iter().all(|(_, t)| t.weight == 0.0) {
+            check(
+                "terms",
+                0.0,
+                false,
+                "every weight is 0: no track could ever be matched (give one term a weight > 0)",
+            )?;
         }
         if let Some(m) = self.defer_to_tentative {
             check("defer_to_tentative", m, m >= 0.0, "must be ≥ 0")?;

@@ -88,7 +88,10 @@ pub const MAX_DETECTIONS: usize = 2_000;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum TrackError {
     /// A detection has a NaN or infinite value, or a negative size.
-    #[error("detection {index}: {field} is {value}, expected {expected}")]
+    #[error(
+        "detection {index}: {field} is {}, expected {expected}",
+        crate::settings::Short::of(.value)
+    )]
     InvalidDetection {
         /// Index of the detection in the frame's input.
         index: usize,
@@ -110,7 +113,7 @@ pub enum TrackError {
         max: usize,
     },
     /// A configuration value is out of range.
-    #[error("config: {field} = {value}: {reason}")]
+    #[error("config: {field} = {}: {reason}", crate::settings::Short::of(.value))]
     InvalidConfig {
         /// Which field (dotted path, e.g. `terms.iou.weight`).
         field: String,

@@ -114,8 +114,10 @@ fn name(m: Method) -> &'static str {
     }
 }
 
-fn gt_mask(path: &Path) -> Result<Mask, Box<dyn std::error::Error>> {
-    let img = shapetrack::io::image_file::read_image(path, None)?.to_luma8();
+/// A ground-truth mask, which must be of its frame's `size`: scored against masks of another
+/// size, every IoU would silently be measured on the wrong pixels.
+fn gt_mask(path: &Path, size: (u32, u32)) -> Result<Mask, Box<dyn std::error::Error>> {
+    let img = shapetrack::io::image_file::read_image(path, Some(size))?.to_luma8();
     let (w, h) = img.dimensions();
     let bits: Vec<u8> = img.as_raw().iter().map(|&v| (v > 127) as u8).collect();
     Ok(Mask::from_full(w, h, &bits)?)
@@ -161,8 +163,9 @@ fn load(root: &Path, seq_dir: &Path) -> Result<Seq, Box<dyn std::error::Error>> 
             .join("DAVIS/Annotations/480p")
             .join(&name)
             .join(format!("{}.png", stem.unwrap_or_default()));
-        frames.push(read_rgb(f)?);
-        gt.push(gt_mask(&g)?);
+        let frame = read_rgb(f)?;
+        gt.push(gt_mask(&g, frame.dimensions())?);
+        frames.push(frame);
     }
     Ok(Seq { name, frames, gt })
 }

@@ -164,15 +164,21 @@ pub fn run(args: Args) -> crate::CliResult {
         }
         head
     };
-    let scalabel_input = is_json(&head);
-    let json_text = if scalabel_input {
-        Some(read_text(&args.det)?)
+    // A JSON file is parsed before anything depends on whether it holds masks: that is read
+    // from its records, not guessed from its text (a `"rle": null` is no mask, and a mask
+    // tracked as a box would be written as nothing).
+    let scalabel_input = if is_json(&head) {
+        Some(scalabel_detections(
+            &read_text(&args.det)?,
+            &det_name,
+            args.video.as_deref(),
+        )?)
     } else {
         None
     };
     // Scalabel masks are tracked like MOTS masks.
-    let mots = match &json_text {
-        Some(text) => text.contains("\"rle\"") && text.contains("\"counts\""),
+    let mots = match &scalabel_input {
+        Some((_, recs, _)) => recs.iter().any(|r| r.mask.is_some()),
         None => is_mots(&head),
     };
     // Masks get the mask preset (appearance, amodal completion, re-identification by colour
@@ -208,6 +214,18 @@ pub fn run(args: Args) -> crate::CliResult {
             ..from_file
         };
     }
+    // Settings that make tracking impossible are refused here, naming the file they came from
+    // as well as the field (the tracker's own check knows only the field).
+    if let Some(p) = &args.config {
+        online_config
+            .validate()
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    if let Some(p) = &args.offline_config {
+        offline_config
+            .validate()
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+    }
 
     let seqinfo_path = args.seqinfo.clone().or_else(|| {
         let p = args.det.parent()?.parent()?.join("seqinfo.ini");
@@ -220,18 +238,18 @@ pub fn run(args: Args) -> crate::CliResult {
         .map(|s| (s.im_width, s.im_height));
 
     let mut scalabel_video: Option<(String, Categories)> = None;
-    let (mut groups, num_records, first_rec, last_rec, mask_size) = match &json_text {
-        Some(text) => {
-            let (video, recs, cats) = scalabel_detections(text, &det_name, args.video.as_deref())?;
+    let (mut groups, num_records, first_rec, last_rec, mask_size) = match scalabel_input {
+        Some((video, recs, cats)) => {
             scalabel_video = Some((video, cats));
-            for r in &recs {
-                check_mask_size(r, seq_size, &det_name, 0)?;
-            }
-            let first = recs.iter().map(|r| r.frame).min();
-            let last = recs.iter().map(|r| r.frame).max().unwrap_or(0);
+            // Every mask of the frame's size: the seqinfo's, or else the first mask's.
             let mask = recs
                 .iter()
                 .find_map(|r| r.mask.as_ref().map(|m| (m.width, m.height)));
+            for r in &recs {
+                check_mask_size(r, seq_size.or(mask), seq_size.is_some(), &det_name, 0)?;
+            }
+            let first = recs.iter().map(|r| r.frame).min();
+            let last = recs.iter().map(|r| r.frame).max().unwrap_or(0);
             let n = recs.len();
             (Groups::loaded(recs), n, first, last, mask)
         }

@@ -99,7 +99,7 @@ pub enum OfflineError {
     #[error("appearance: {0}")]
     Sift(#[from] SiftError),
     /// A configuration value is out of range.
-    #[error("config: {field} = {value}: {reason}")]
+    #[error("config: {field} = {}: {reason}", crate::settings::Short::of(.value))]
     InvalidConfig {
         /// Which field (dotted path).
         field: &'static str,

@@ -47,16 +47,17 @@ def write(path, text):
         f.write(text)
 
 
-def layout(case, bench, seqs):
-    """seqs: {name: (num_frames, gt_lines, tracker_lines)} -> writes the TrackEval layout."""
+def layout(case, bench, seqs, size=(640, 480)):
+    """seqs: {name: (num_frames, gt_lines, tracker_lines)} -> writes the TrackEval layout;
+    size: the seqinfo's imWidth, imHeight."""
     root = os.path.join(HERE, case)
     shutil.rmtree(root, ignore_errors=True)
     for name, (n, gt, tr) in seqs.items():
         d = os.path.join(root, "gt", bench + "-train", name)
         write(os.path.join(d, "gt", "gt.txt"), "".join(l + "\n" for l in gt))
         write(os.path.join(d, "seqinfo.ini"),
-              "[Sequence]\nname=%s\nimDir=img1\nframeRate=25\nseqLength=%d\nimWidth=640\n"
-              "imHeight=480\nimExt=.jpg\n" % (name, n))
+              "[Sequence]\nname=%s\nimDir=img1\nframeRate=25\nseqLength=%d\nimWidth=%d\n"
+              "imHeight=%d\nimExt=.jpg\n" % (name, n, size[0], size[1]))
         write(os.path.join(root, "trackers", bench + "-train", "test", "data", name + ".txt"),
               "".join(l + "\n" for l in tr))
     write(os.path.join(root, "gt", "seqmaps", bench + "-train.txt"),
@@ -254,8 +255,9 @@ def mots_case():
             gt.append(rle_line(f, 10000, 10, ignore & (glab == 0)))
         for tid, cls in sorted(tmeta.items()):
             tr.append(rle_line(f, tid, cls, tlab == tid))
-    root = layout("mots", "MOTS", {"MOTS-01": (n, gt, tr)})
-    # MOTS seqinfo sizes are irrelevant to TrackEval; keep the layout identical to MOT's.
+    # TrackEval ignores a MOTS seqinfo's size, but shapetrack eval refuses masks of another
+    # size than the sequence's (issue 65): the seqinfo says the masks' size.
+    root = layout("mots", "MOTS", {"MOTS-01": (n, gt, tr)}, size=(W, H))
     save_expected(root, run_trackeval(root, "MOTS", True))
 
 

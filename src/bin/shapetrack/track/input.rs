@@ -1,25 +1,44 @@
 //! The detection file of `shapetrack track`: MOT, MOTS or Scalabel told apart by content, a
 //! text file checked in a first pass, then read one frame's records at a time.
 
+use shapetrack::io::limits::image_size_ok;
 use shapetrack::io::motchallenge::{parse_mot_line, parse_mots_line, MotReadOptions};
 use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, Categories};
-use shapetrack::io::{IoError, Record};
+use shapetrack::io::{strip_bom, IoError, Record, Rle};
 use std::path::{Path, PathBuf};
 
-/// Whether a detection file is MOTS: its first line has six whitespace-separated fields, no
-/// comma, and a sixth field that is not a number (an RLE string).
+/// Whether a detection file is MOTS, from its first non-blank line: six whitespace-separated
+/// fields, no comma, and a sixth that is an RLE mask of the height and width in the fourth and
+/// fifth. A small mask's RLE may be all digits (`538` is a 4×4 mask's runs 5, 3, 8), so a
+/// sixth field that reads as a number is decoded rather than taken for a box height: a MOT
+/// box line's height almost never decodes to runs covering exactly its "height × width".
 pub(super) fn is_mots(text: &str) -> bool {
-    let Some(line) = text.lines().map(str::trim).find(|l| !l.is_empty()) else {
+    let Some(line) = text
+        .lines()
+        .map(|l| strip_bom(l).trim())
+        .find(|l| !l.is_empty())
+    else {
         return false;
     };
     let f: Vec<&str> = line.split_whitespace().collect();
-    !line.contains(',') && f.len() == 6 && f[5].parse::<f64>().is_err()
+    if line.contains(',') || f.len() != 6 {
+        return false;
+    }
+    if f[5].parse::<f64>().is_err() {
+        return true;
+    }
+    match (f[3].parse::<u32>(), f[4].parse::<u32>()) {
+        (Ok(h), Ok(w)) => {
+            image_size_ok(u64::from(w), u64::from(h)) && Rle::from_compressed(f[5], h, w).is_ok()
+        }
+        _ => false,
+    }
 }
 
-/// Whether a detection file is JSON (Scalabel): its first non-blank character opens a list or
-/// an object.
+/// Whether a detection file is JSON (Scalabel): its first non-blank character (after a
+/// byte-order mark) opens a list or an object.
 pub(super) fn is_json(text: &str) -> bool {
-    matches!(text.trim_start().chars().next(), Some('[' | '{'))
+    matches!(strip_bom(text).trim_start().chars().next(), Some('[' | '{'))
 }
 
 /// The detections of one video of a Scalabel file (`video`, or the file's only one), its name
@@ -90,6 +109,8 @@ pub(super) fn line_of(
 }
 
 fn parse_line(raw: &str, file: &str, ln: usize, mots: bool) -> Result<Option<Record>, IoError> {
+    // The first line may start with a byte-order mark (these lines do not pass `read_text`).
+    let raw = if ln == 1 { strip_bom(raw) } else { raw };
     if mots {
         parse_mots_line(raw, file, ln)
     } else {
@@ -120,7 +141,15 @@ pub(super) fn scan(
         let Some(r) = parse_line(&raw, &file, ln, mots)? else {
             continue;
         };
-        check_mask_size(&r, image_size, &file, ln)?;
+        // Without a seqinfo the first mask gives the frame's size, and every other mask must
+        // have it too (a mask of another size would be tracked on a frame it does not fit).
+        check_mask_size(
+            &r,
+            image_size.or(scan.mask_size),
+            image_size.is_some(),
+            &file,
+            ln,
+        )?;
         if scan.records > 0 && r.frame < prev {
             scan.sorted = false;
         }
@@ -135,20 +164,27 @@ pub(super) fn scan(
     Ok(scan)
 }
 
-/// A mask must be of the frame it belongs to (the seqinfo's size when given).
+/// A mask must be of the frame it belongs to: `size`, the seqinfo's when `from_seqinfo`,
+/// else the first mask's.
 pub(super) fn check_mask_size(
     r: &Record,
-    image_size: Option<(u32, u32)>,
+    size: Option<(u32, u32)>,
+    from_seqinfo: bool,
     file: &str,
     line: usize,
 ) -> Result<(), IoError> {
-    if let (Some(m), Some((w, h))) = (&r.mask, image_size) {
+    if let (Some(m), Some((w, h))) = (&r.mask, size) {
         if (m.width, m.height) != (w, h) {
+            let source = if from_seqinfo {
+                "seqinfo"
+            } else {
+                "the file's first mask"
+            };
             return Err(IoError::Invalid {
                 file: file.to_string(),
                 line,
                 message: format!(
-                    "a {}x{} mask in a {w}x{h} video (seqinfo): masks must be of the frame's size",
+                    "a {}x{} mask in a {w}x{h} video ({source}): masks must be of the frame's size",
                     m.width, m.height
                 ),
             });
