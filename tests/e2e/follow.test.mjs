@@ -129,6 +129,8 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   const followed = await untilState(page, (s) => !s.following && /followed/.test(s.status), 180_000);
   const id = followed.selection.a;
   assert.ok(id !== null, followed.status);
+  // The box tool is put away once its box is followed (right after the status says so).
+  await untilState(page, (s) => s.tool === null, 10_000);
   const first = await trackRecords(page, id);
   assert.deepEqual(first.map((/** @type {any} */ r) => r.frame), Array.from({ length: last }, (_, i) => i + 1), 'frames 1..101');
   assert.ok(first.every((/** @type {any} */ r) => r.source === 'follow'));
@@ -167,6 +169,8 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   const g51 = truth[51].find((r) => r.id === target.id);
   assert.ok(g51);
   const before = JSON.stringify(await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records()));
+  await page.keyboard.press('x'); // the box tool again (put away after the first follow)
+  await untilState(page, (s) => s.tool === 'box' && s.selection.a === id);
   await dragBox(page, { x: g51.bbox.x, y: g51.bbox.y }, { x: g51.bbox.x + g51.bbox.w, y: g51.bbox.y + g51.bbox.h });
   await untilState(page, (s) => !s.following && /followed from frame 51/.test(s.status), 180_000);
   const second = await trackRecords(page, id);
@@ -196,8 +200,7 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   await page.keyboard.press('Control+z');
 
   // Moving a followed shape is a correction too: drag track's shape on frame 51 by 12 px to
-  // the right (no tool: the tool is switched off first).
-  await page.keyboard.press('Escape'); // the box tool off
+  // the right (no tool: the box tool was put away when its box was followed).
   await untilState(page, (s) => s.tool === null && s.selection.a === id && s.frame === 51);
   const r51 = first.find((/** @type {any} */ r) => r.frame === 51);
   {
@@ -277,7 +280,6 @@ test('follow a shape for 100 frames, correct a keyframe, undo, cancel, and refus
   assert.deepEqual(backRecs.map((/** @type {any} */ r) => r.frame), Array.from({ length: 31 }, (_, i) => last - 30 + i));
   await expectFollowed('a polygon on frame 101, followed 30 frames back', backId, Array.from({ length: 30 }, (_, i) => last - 30 + i));
   await page.keyboard.press('Control+z');
-  await page.keyboard.press('Escape'); // the polygon tool off
 
   // Cancel: a long follow (300 frames, from frame 101 on) stops when asked, keeps what it
   // followed, and is one edit that undo takes back.
@@ -434,7 +436,6 @@ test('a video file: a box followed forward, then backward through seeks', async 
 
   // Backward from frame 16: the same track, its shape there as the start; the follow stops
   // before the keyframe on frame 1 (a shape the labeller gave is never overwritten).
-  await page.keyboard.press('Escape'); // the box tool off
   await page.selectOption('#fol-dir', 'backward');
   await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.seek(16));
   await untilState(page, (s) => s.frame === 16 && s.tool === null && s.selection.a === id);

@@ -388,6 +388,99 @@ test('wasm is at most 804 KB gzipped', () => {
   assert.ok(gz <= 804 * 1024, `${gz} bytes gzipped`);
 });
 
+test('edits not exported are never replaced without a question: demo, import and closing the tab ask first', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const gt = tudGt();
+  await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
+  const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  // Nothing edited yet: the demo replaces the import without asking (no dialog handler is
+  // set, so a dialog would fail the test through the page's error watch below).
+  // An edit: renumber the first track.
+  const first = (await state()).ids[0];
+  await page.evaluate((id) => /** @type {any} */ (window).__shapetrack.app.select(id, false), first);
+  await page.keyboard.press('n');
+  await page.fill('#renumber-input', '901');
+  await page.press('#renumber-input', 'Enter');
+  assert.ok((await state()).ids.includes(901));
+
+  /** @type {string[]} */
+  const asked = [];
+  const answer = (/** @type {boolean} */ yes) =>
+    page.once('dialog', (d) => {
+      asked.push(`${d.type()}: ${d.message()}`);
+      void (yes ? d.accept() : d.dismiss());
+    });
+
+  // D (the demo) asks; declined, the table and its undo history stay.
+  answer(false);
+  await page.keyboard.press('d');
+  await page.waitForFunction(() => document.getElementById('status')?.textContent?.startsWith('kept your tracks'));
+  assert.equal(asked.length, 1);
+  assert.match(asked[0], /^confirm: The demo replaces the tracks, with 1 edit not exported/);
+  let st = await state();
+  assert.ok(st.ids.includes(901), 'the edited table is kept');
+  assert.equal(st.source, null, 'the demo did not open');
+  assert.equal(st.canUndo, true, 'and its undo history');
+
+  // Import asks too; declined, nothing changes.
+  answer(false);
+  await page.setInputFiles('#file-import', { name: 'other.txt', mimeType: 'text/plain', buffer: Buffer.from('1,1,10,10,20,30,1,-1,-1,-1\n') });
+  await page.waitForFunction(() => document.getElementById('status')?.textContent?.startsWith('kept your tracks'));
+  assert.match(asked[1], /^confirm: Importing other\.txt replaces the tracks/);
+  assert.ok((await state()).ids.includes(901));
+
+  // Closing the tab asks (the page's beforeunload).
+  answer(false);
+  await page.close({ runBeforeUnload: true });
+  // The dialog comes asynchronously (a settling wait; the assertion below is on what came).
+  for (let i = 0; i < 200 && asked.length < 3; i++) await new Promise((r) => setTimeout(r, 50));
+  assert.equal(asked.length, 3, `asked: ${asked.join(' | ')}`);
+  assert.match(asked[2], /^beforeunload/);
+  assert.equal(page.isClosed(), false, 'declined: the tab stays');
+
+  // Exported, the work is saved: the demo replaces it without a question.
+  await page.selectOption('#export-format', 'mot');
+  await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+  await page.keyboard.press('d');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().source?.kind === 'synth');
+  assert.equal(asked.length, 3, 'no question after the export');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+test('fields and shortcuts: Esc in the new-id field keeps the selection; a shortcut typed in the Frames box acts', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const gt = tudGt();
+  await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
+  const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  const first = (await state()).ids[0];
+  await page.evaluate((id) => /** @type {any} */ (window).__shapetrack.app.select(id, false), first);
+  await page.keyboard.press('n');
+  assert.ok(await page.locator('#renumber-input').isVisible());
+  await page.press('#renumber-input', 'Escape');
+  assert.ok(!(await page.locator('#renumber-input').isVisible()), 'Esc closes the new-id field');
+  assert.deepEqual((await state()).selection, { a: first, b: null }, 'and keeps the selection');
+  assert.deepEqual((await state()).ids.includes(first), true, 'nothing renumbered');
+
+  // A shortcut typed in the follow's Frames box (a number field has no use for letters) acts,
+  // instead of vanishing: K hides the masks; the box keeps its value.
+  assert.equal(await page.isChecked('#opt-masks'), true);
+  await page.fill('#fol-len', '40');
+  await page.press('#fol-len', 'k');
+  assert.equal(await page.isChecked('#opt-masks'), false, 'K reached the app from the Frames box');
+  assert.equal(await page.inputValue('#fol-len'), '40');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.ok(app.browser.requests.length > 0, 'requests were recorded');
   assert.deepEqual(app.browser.foreign, []);

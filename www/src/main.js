@@ -9,7 +9,7 @@
 
 import { loadCore } from './lib/core.js';
 import { App } from './app.js';
-import { actionFor, SHORTCUTS } from './lib/keys.js';
+import { actionFor, numberFieldIgnores, SHORTCUTS } from './lib/keys.js';
 import { byId, h } from './lib/dom.js';
 
 /** @param {Event} e */
@@ -21,6 +21,10 @@ function typing(e) {
 async function main() {
   const { core } = await loadCore();
   const app = new App(core);
+  // Closing or reloading the tab with edits not exported asks first: they live only here.
+  addEventListener('beforeunload', (e) => {
+    if (app.model.unsaved) e.preventDefault();
+  });
   const params = new URLSearchParams(location.search);
   if (params.get('speed') === 'max') {
     app.speed = 'max';
@@ -53,9 +57,21 @@ async function main() {
     // An open dialog owns the keyboard: its own Esc closes it (so no preventDefault here), and
     // no shortcut reaches the player behind it.
     if (document.querySelector('dialog[open]')) return;
-    if (typing(e) && e.key !== 'Escape') return;
-    // Enter on a focused button or link activates it, as usual; elsewhere it closes a polygon.
     const t = /** @type {HTMLElement | null} */ (e.target);
+    if (typing(e)) {
+      if (e.key === 'Escape' && t?.id === 'renumber-input') {
+        // Esc in the new-id field gives up the renumbering, not the selection.
+        e.preventDefault();
+        app.panel.cancelRenumber();
+        t.blur();
+        return;
+      }
+      // (The new-id field is left by Enter or Esc only: a stray letter there is no command.)
+      const numberField = t instanceof HTMLInputElement && t.type === 'number' && t.id !== 'renumber-input';
+      if (e.key !== 'Escape' && !(numberField && numberFieldIgnores(e))) return;
+      t?.blur();
+    }
+    // Enter on a focused button or link activates it, as usual; elsewhere it closes a polygon.
     if (e.key === 'Enter' && t?.closest?.('button, a, summary')) return;
     const a = actionFor(e);
     if (!a) return;

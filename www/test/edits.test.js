@@ -348,3 +348,22 @@ test('one update may report earlier frames (a track confirmed late)', () => {
   m.ingest([rec(3, 1), rec(1, 2), rec(2, 2), rec(3, 2)]);
   assert.deepEqual(layout(m.table), { 1: [1, 2, 3], 2: [1, 2, 3] });
 });
+
+test('unsaved: edits since the last save or replace; undoing back to the saved state is clean', () => {
+  const m = model({ 1: [1, 2, 3], 2: [5, 6], 3: [8] });
+  assert.equal(m.unsaved, false, 'a fresh table has nothing unsaved');
+  m.merge(1, 2);
+  assert.equal(m.unsaved, true);
+  m.markSaved();
+  assert.equal(m.unsaved, false, 'saved');
+  m.merge(1, 3);
+  assert.equal(m.unsaved, true, 'an edit after the save');
+  m.undo();
+  assert.equal(m.unsaved, false, 'undone back to the saved state');
+  m.undo();
+  assert.equal(m.unsaved, true, 'undone past the save: the table differs from what was saved');
+  m.redo();
+  assert.equal(m.unsaved, false);
+  m.replaceAll([rec(1, 9)]);
+  assert.equal(m.unsaved, false, 'a replaced table starts clean');
+});

@@ -1,6 +1,6 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { actionFor, SHORTCUTS } from '../src/lib/keys.js';
+import { actionFor, numberFieldIgnores, SHORTCUTS } from '../src/lib/keys.js';
 import { FpsMeter } from '../src/lib/fps.js';
 import { colorOf, hslToRgb } from '../src/lib/colors.js';
 
@@ -49,4 +49,12 @@ test('colours are stable and neighbours differ', () => {
   assert.ok(Math.abs(a[0] - b[0]) + Math.abs(a[1] - b[1]) + Math.abs(a[2] - b[2]) > 100);
   assert.deepEqual(hslToRgb(0, 1, 0.5), [255, 0, 0]);
   assert.deepEqual(hslToRgb(120, 1, 0.5), [0, 255, 0]);
+});
+
+test('a number field lets through the shortcuts it has no use for, and keeps what a number needs', () => {
+  for (const key of [' ', 'd', 'm', 'k', '?', '[']) assert.equal(numberFieldIgnores({ key }), true, key);
+  for (const key of ['0', '7', '-', '+', '.', 'e', 'E', 'Backspace', 'ArrowLeft', 'ArrowUp', 'Enter', 'Tab']) {
+    assert.equal(numberFieldIgnores({ key }), false, key);
+  }
+  assert.equal(numberFieldIgnores({ key: 'z', ctrlKey: true }), false, 'Ctrl+Z undoes in the field');
 });

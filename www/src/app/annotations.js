@@ -3,6 +3,7 @@
 
 import { TrackTable } from '../model/tracks.js';
 import { byId } from '../lib/dom.js';
+import { mayReplace } from './editing.js';
 import { guessFormat, exportName, formatInfo } from '../io/formats.js';
 
 /**
@@ -42,6 +43,7 @@ export function parse(app, name, text) {
 export async function importTracks(app, name, text) {
   const parsed = app.parse(name, text);
   const records = /** @type {TrackRecord[]} */ (parsed.records);
+  if (!mayReplace(app, `Importing ${name}`)) return;
   await app.stop();
   app.model.replaceAll(records);
   if (!app.source) {
@@ -107,6 +109,7 @@ export function download(app, format) {
   a.href = URL.createObjectURL(new Blob([text], { type: 'text/plain' }));
   a.download = name;
   a.click();
+  app.model.markSaved();
   setTimeout(() => URL.revokeObjectURL(a.href), 1000);
   app.status(`saved ${name} (${formatInfo(format).label})`);
 }

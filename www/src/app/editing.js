@@ -85,3 +85,20 @@ export function action(app, a) {
     app.status('select a track first', true);
   }
 }
+
+/**
+ * Whether `what` (opening a source, the demo, an import) may replace the track table: yes when
+ * it holds no edits made since the last export; otherwise the person is asked first (a
+ * replace clears the undo history, so it could not be taken back). Says so in the status line
+ * when they keep their work.
+ * @param {App} app
+ * @param {string} what e.g. "Opening clip.mp4"
+ * @returns {boolean}
+ */
+export function mayReplace(app, what) {
+  if (!app.model.unsaved) return true;
+  const n = app.model.undoStack.length;
+  const ok = window.confirm(`${what} replaces the tracks, with ${n} edit${n === 1 ? '' : 's'} not exported yet (this cannot be undone). Replace them?`);
+  if (!ok) app.status('kept your tracks and edits: export them first, or confirm to replace them');
+  return ok;
+}

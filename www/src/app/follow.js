@@ -79,6 +79,9 @@ export async function shapeDrawn(app, shape) {
   // A box says where the object is, not its shape: it becomes the outline it holds. A
   // polygon is the labeller's outline already.
   await app.shapeGiven(shape.kind === 'box' ? await app.boxMask(shape.box) : rasterize(shape, width, height));
+  // Done: the tool is put away, so the next click selects again instead of starting another
+  // box (a refused shape throws above and leaves it armed for another try).
+  if (app.shapeTool.mode) app.useTool(null);
 }
 
 /**

@@ -3,6 +3,7 @@
 
 import { TrackTable } from '../model/tracks.js';
 import { byId } from '../lib/dom.js';
+import { mayReplace } from './editing.js';
 import { videoSource, imageSource, webcamSource } from '../sources/sources.js';
 
 /**
@@ -46,6 +47,10 @@ export async function openWebcam(app) {
  * @param {Source | null} src
  */
 export async function openSource(app, src) {
+  if (!mayReplace(app, src ? `Opening ${src.name}` : 'The demo')) {
+    src?.close();
+    return;
+  }
   await app.stop();
   if (app.source && app.source.kind !== 'synth') app.source.close();
   app.status(src ? `opening ${src.name}…` : 'starting the demo scene…');

@@ -129,7 +129,11 @@ export async function runOffline(app) {
     }
     const onlineIds = app.model.table.ids().length;
     const onlineInterpolated = app.model.table.all().filter((r) => r.interpolated).length;
+    // The pass's joins are the tracker's output, not the person's edits: a table that had no
+    // unsaved edits before it has none after (replacing it asks nothing).
+    const clean = !app.model.unsaved;
     const applied = app.model.relink({ joins: res.joins, filled: res.filled });
+    if (clean) app.model.markSaved();
     app.lastEdit = app.model.undoStack.at(-1)?.label ?? '';
     const ids = app.model.table.ids().length;
     session.finish({ onlineIds, onlineInterpolated, ids, joins: applied.joined, filled: applied.filled, ms: res.ms });

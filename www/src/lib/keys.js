@@ -68,3 +68,14 @@ export function actionFor(e) {
   for (const s of SHORTCUTS) if (s.match(e)) return s.action;
   return null;
 }
+
+/**
+ * Whether a number field (the follow's Frames box, the new-id field) has no use for `e`: a
+ * space, or a printable key that cannot be part of a number. Such a key leaves the field and
+ * acts as its shortcut, instead of vanishing (typing Space there to play did nothing).
+ * @param {KeyLike} e
+ */
+export function numberFieldIgnores(e) {
+  if (mod(e) || e.altKey) return false;
+  return e.key === ' ' || (e.key.length === 1 && !/[0-9eE+\-.,]/.test(e.key));
+}

@@ -90,6 +90,12 @@ export class EditModel {
     this.undoStack = [];
     /** @type {Patch[]} */
     this.redoStack = [];
+    /**
+     * The undo stack's top when the work was last saved (exported) or replaced: the table
+     * holds unsaved edits while the top differs (undoing back to it makes it clean again).
+     * @type {Patch | null}
+     */
+    this.savedTop = null;
     /** @type {Set<() => void>} */
     this.listeners = new Set();
     /**
@@ -200,7 +206,18 @@ export class EditModel {
     this.colours = new Map();
     this.undoStack = [];
     this.redoStack = [];
+    this.savedTop = null;
     this.emit();
+  }
+
+  /** Marks the table as it is now as saved (it was just exported). */
+  markSaved() {
+    this.savedTop = this.undoStack.at(-1) ?? null;
+  }
+
+  /** Whether the table holds edits made since it was last saved or replaced. */
+  get unsaved() {
+    return (this.undoStack.at(-1) ?? null) !== this.savedTop;
   }
 
   /**
