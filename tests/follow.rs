@@ -545,3 +545,37 @@ fn the_learned_outline_is_taken_where_it_agrees_and_only_while_the_follower_is_u
     let got = follow_learned(10, &always, half);
     assert!(got.iter().all(|&(iou, l)| !l && iou > 0.8), "{got:.3?}");
 }
+
+#[test]
+fn a_learned_outline_that_takes_in_a_neighbour_is_refused_past_the_growth_bound() {
+    // The network outlines the object and a neighbour touching it as one salient region (a
+    // horse and its rider, a flock): half the object's box more, on its right.
+    let with_neighbour = |t: &Mask| {
+        let b = t.bbox();
+        let n = Mask::from_bbox(&BBox {
+            x: b.x + b.w - 1.0,
+            w: b.w * 0.5,
+            ..b
+        });
+        let bits: Vec<u8> = (0..H as i32)
+            .flat_map(|y| (0..W as i32).map(move |x| (x, y)))
+            .map(|(x, y)| u8::from(t.get(x, y) || n.get(x, y)))
+            .collect();
+        Mask::from_full(W, H, &bits).unwrap()
+    };
+    let bounded = FollowConfig {
+        learned_below: 1.0,
+        learned_max_growth: 0.2,
+        ..FollowConfig::default()
+    };
+    let got = follow_learned(10, &bounded, with_neighbour);
+    assert!(got.iter().all(|&(iou, l)| !l && iou > 0.8), "{got:.3?}");
+    // Without the bound (the default: only `learned_iou` limits growth) it is taken and the
+    // followed outline grows onto the neighbour.
+    let unbounded = FollowConfig {
+        learned_below: 1.0,
+        ..FollowConfig::default()
+    };
+    let got = follow_learned(10, &unbounded, with_neighbour);
+    assert!(got.iter().any(|&(iou, l)| l && iou < 0.8), "{got:.3?}");
+}

@@ -325,7 +325,12 @@ impl Follower {
                 let iou = own.iou(&mask);
                 let trusted = !mask.is_empty() && confidence >= cfg.lost_confidence;
                 let kept = own.area() as f64 / mask.area().max(1) as f64;
-                if !own.is_empty() && iou >= cfg.learned_iou && kept >= 1.0 - cfg.learned_max_shrink
+                let added =
+                    (own.area() - own.intersection(&mask)) as f64 / mask.area().max(1) as f64;
+                if !own.is_empty()
+                    && iou >= cfg.learned_iou
+                    && kept >= 1.0 - cfg.learned_max_shrink
+                    && added <= cfg.learned_max_growth
                 {
                     mask = own;
                     confidence = confidence.max(iou);
