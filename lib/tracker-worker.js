@@ -2,6 +2,11 @@
 // the background detector unless the page sends its own detections. Requests are handled one at
 // a time, in order (the tracker is stateful). Protocol: { id, type, ... } in, { id, ok, value |
 // error } out.
+//
+// The state changes only when a request succeeds: `start` builds the new tracker and detector
+// before it frees the old ones (a rejected start leaves the running tracker working, and frees
+// what it had built), and a new frame buffer replaces the old one only once it exists. Every
+// wasm object is freed by whatever replaces it: wasm memory is not garbage-collected.
 
 import { load, writeRgba, Tracker, BackgroundDetector, Detections, FrameBuffer } from './index.js';
 
@@ -30,22 +35,18 @@ async function handle(req) {
   switch (req.type) {
     case 'start': {
       await load(req.wasm);
-      const o = req.options ?? {};
-      state?.tracker.free();
-      state = {
-        tracker: new Tracker(o.tracker ?? null, o.offline ? { fps: o.fps ?? 25 } : null),
-        detector: o.detector === 'none' ? null : new BackgroundDetector(o.background ?? null),
-        buffer: null,
-        frame: 0,
-      };
+      const next = create(req.options ?? {});
+      release(state);
+      state = next;
       return null;
     }
     case 'track': {
       const s = need();
       const { width, height, data } = await pixels(req.image);
       if (!s.buffer || s.buffer.width !== width || s.buffer.height !== height) {
+        const buffer = new FrameBuffer(width, height);
         s.buffer?.free();
-        s.buffer = new FrameBuffer(width, height);
+        s.buffer = buffer;
       }
       writeRgba(s.buffer, data);
       let dets;
@@ -67,6 +68,29 @@ async function handle(req) {
     default:
       throw new Error(`unknown request ${JSON.stringify(req.type)}`);
   }
+}
+
+/**
+ * A new state from `start`'s options; on an error, what was built is freed before it is thrown.
+ * @param {any} o
+ * @returns {State}
+ */
+function create(o) {
+  const tracker = new Tracker(o.tracker ?? null, o.offline ? { fps: o.fps ?? 25 } : null);
+  try {
+    const detector = o.detector === 'none' ? null : new BackgroundDetector(o.background ?? null);
+    return { tracker, detector, buffer: null, frame: 0 };
+  } catch (err) {
+    tracker.free();
+    throw err;
+  }
+}
+
+/** Frees every wasm object of a state. @param {State | null} s */
+function release(s) {
+  s?.tracker.free();
+  s?.detector?.free();
+  s?.buffer?.free();
 }
 
 function need() {

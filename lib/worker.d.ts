@@ -18,7 +18,7 @@ export interface TrackerWorkerOptions {
 
 /** The tracker in a Web Worker: every call is a message; the page stays responsive. */
 export class TrackerWorker {
-  /** Starts a worker and a tracker in it. */
+  /** Starts a worker and a tracker in it; rejects (and stops that worker) when the options are refused. */
   static start(options?: TrackerWorkerOptions): Promise<TrackerWorker>;
   private constructor(worker: Worker);
   /** Tracks the next frame (an ImageBitmap is transferred and closed; ImageData is copied). */

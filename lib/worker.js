@@ -14,7 +14,14 @@ export class TrackerWorker {
     const worker = new Worker(new URL('./tracker-worker.js', import.meta.url), { type: 'module' });
     const t = new TrackerWorker(worker);
     const { wasm, ...rest } = options;
-    await t.request({ type: 'start', options: rest, wasm: wasm instanceof URL ? wasm.href : wasm });
+    try {
+      await t.request({ type: 'start', options: rest, wasm: wasm instanceof URL ? wasm.href : wasm });
+    } catch (err) {
+      // Nobody holds this worker but us: a rejected start stops it (its thread and its wasm
+      // instance), rather than leaving it running unreachable.
+      t.terminate();
+      throw err;
+    }
     return t;
   }
 

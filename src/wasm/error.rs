@@ -30,15 +30,18 @@ pub(super) enum BindingError {
     /// An input that cannot be read: a settings object (see `settings`), a mask too large.
     #[error("{0}")]
     Invalid(String),
-    /// A frame size outside what a browser canvas can hold.
-    #[error("frame size {width}x{height} is outside 1..={max} on each side")]
+    /// A frame size outside the caps (`frame::frame_size_ok`).
+    #[error(
+        "frame size {width}x{height} is outside 1..={} on each side or over {} pixels \
+         (8192x8192): the detectors and the tracker could not hold it in wasm memory",
+        super::frame::MAX_SIDE,
+        crate::io::limits::MAX_PIXELS
+    )]
     FrameSize {
         /// Requested width.
         width: u32,
         /// Requested height.
         height: u32,
-        /// Largest side accepted.
-        max: u32,
     },
     /// Frames must be tracked in order, each once.
     #[error("frames must be tracked in order: expected frame {expected}, got {got}")]
@@ -70,6 +73,18 @@ pub(super) enum BindingError {
     /// The offline pass has run: the tracker's result is final.
     #[error("this tracker is finished (the offline pass has run): start a new tracker")]
     Finished,
+    /// The tracker's kept history is full (`MAX_KEPT_SHAPES`): no frame is tracked, and
+    /// nothing kept is lost.
+    #[error(
+        "the tracker keeps at most {cap} shapes and is full after {frames} frames: this frame \
+         was not tracked; read or export tracks() (or run finish()), then start a new tracker"
+    )]
+    HistoryFull {
+        /// Most shapes kept.
+        cap: usize,
+        /// Frames tracked.
+        frames: u32,
+    },
     /// The progress callback threw.
     #[error("progress callback threw: {message}")]
     Progress {

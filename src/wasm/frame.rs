@@ -11,6 +11,16 @@ use wasm_bindgen::prelude::*;
 /// The largest frame side accepted (a 16k canvas is already beyond every browser's limit).
 pub(super) const MAX_SIDE: u32 = 16384;
 
+/// Whether frames of `width × height` can be tracked: each side in `1..=MAX_SIDE` and at
+/// most `io::limits::MAX_PIXELS` (8192 × 8192) pixels, the readers' cap. Every detector and
+/// the tracker allocate several planes of the frame's size: at 16384 × 16384 (1 GiB of
+/// RGBA, accepted before) the background detector sat within a few MB of wasm32's 4 GiB.
+pub(super) fn frame_size_ok(width: u32, height: u32) -> bool {
+    width <= MAX_SIDE
+        && height <= MAX_SIDE
+        && crate::io::limits::image_size_ok(width.into(), height.into())
+}
+
 /// An RGBA frame that lives in wasm memory; JavaScript writes pixels into it in place.
 ///
 /// `ptr()`/`len()` locate the bytes in `memory.buffer`. A view on that buffer is invalidated
@@ -26,16 +36,14 @@ pub struct FrameBuffer {
 #[wasm_bindgen]
 impl FrameBuffer {
     /// Allocates `width·height·4` zeroed bytes; an allocation the browser refuses is an
-    /// error, not a trap.
+    /// error, not a trap. A size the detectors cannot process (each side in 1..=16384, at most
+    /// 2²⁶ pixels, 8192 × 8192) is refused here with an `Error`, before anything is built,
+    /// rather than trapping later in a detector out of memory.
     #[wasm_bindgen(constructor)]
     pub fn new(width: f64, height: f64) -> Result<FrameBuffer, JsValue> {
         let (width, height) = (whole_u32("width", width)?, whole_u32("height", height)?);
-        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-            return Err(js_error(BindingError::FrameSize {
-                width,
-                height,
-                max: MAX_SIDE,
-            }));
+        if !frame_size_ok(width, height) {
+            return Err(js_error(BindingError::FrameSize { width, height }));
         }
         let n = width as usize * height as usize * 4;
         let mut data = Vec::new();

@@ -169,6 +169,15 @@ pub(super) fn offline_config(v: &OfflineSettings, online: TrackConfig) -> Result
         side("width", map.remove("width"))?,
         side("height", map.remove("height"))?,
     ) {
+        // Masks are encoded as RLE over this size: 0 × 0 encoded every mask as empty and
+        // sides past the caps wrapped the run counts, both silently; refused here, like a
+        // frame of that size (`FrameBuffer`).
+        (Some(w), Some(h)) if !frame_size_ok(w, h) => {
+            return Err(js_error(BindingError::FrameSize {
+                width: w,
+                height: h,
+            }))
+        }
         (Some(w), Some(h)) => Some((w, h)),
         (None, None) => None,
         _ => {

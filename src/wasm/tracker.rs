@@ -79,8 +79,20 @@ fn record_of(k: &RleShape) -> Record {
     r
 }
 
+/// Most shapes a [`Tracker`] keeps (its history, what `tracks()` and `finish()` read).
+///
+/// A long webcam session reports shapes without end; the kept `Vec` would exhaust wasm32's
+/// memory and then overflow (a trap near 8 M shapes that killed the page's tracker with its
+/// history). Two million is ~1.9 hours at 30 fps with ten objects in view; being under 2²¹
+/// the `Vec` never doubles past 2²¹ slots (one frame adds at most a few thousand shapes), so
+/// the history and the offline pass's copy of it stay within memory. Once it is full,
+/// `update` refuses the next frame with an `Error` saying so and changes nothing: every kept
+/// shape can still be read, exported or passed through `finish()`; a new tracker goes on.
+pub const MAX_KEPT_SHAPES: usize = 2_000_000;
+
 /// The tracker. Owns its ids (two trackers on a page never share a counter) and keeps every
-/// reported shape, so the whole result can be read back or exported at any time.
+/// reported shape, up to [`MAX_KEPT_SHAPES`], so the whole result can be read back or
+/// exported at any time.
 ///
 /// Built with offline options (`new Tracker(config, { fps })`) it also keeps what the offline
 /// pass needs, and `finish()` runs that pass (thesis ch. 5: trajectory re-linking across
@@ -98,6 +110,8 @@ pub struct Tracker {
     offline: bool,
     /// `finish` ran: the history is final and no frame may follow.
     finished: bool,
+    /// Most shapes kept ([`MAX_KEPT_SHAPES`] unless set by [`Tracker::with_history_cap`]).
+    cap: usize,
 }
 
 #[wasm_bindgen]
@@ -153,7 +167,21 @@ impl Tracker {
             size: None,
             offline,
             finished: false,
+            cap: MAX_KEPT_SHAPES,
         })
+    }
+
+    /// Number of shapes kept so far (see [`MAX_KEPT_SHAPES`]).
+    #[wasm_bindgen(getter, js_name = keptShapes)]
+    pub fn kept_shapes(&self) -> u32 {
+        u32::try_from(self.inner.online_shapes().len()).unwrap_or(u32::MAX)
+    }
+
+    /// Most shapes this tracker keeps: once `keptShapes` reaches it, `update` refuses frames
+    /// (see [`MAX_KEPT_SHAPES`]).
+    #[wasm_bindgen(getter, js_name = maxKeptShapes)]
+    pub fn max_kept_shapes(&self) -> u32 {
+        u32::try_from(self.cap).unwrap_or(u32::MAX)
     }
 
     /// Number of frames tracked so far.
@@ -199,12 +227,16 @@ impl Tracker {
     ) -> Result<Ts<Shapes>, JsValue> {
         let frame = whole_u32("frame", frame)?;
         self.check_next(frame)?;
-        self.check_size(buf.width(), buf.height())?;
+        let size = (buf.width(), buf.height());
+        self.check_size(size)?;
         let image = buf.frame()?;
         let shapes = self
             .inner
             .push_frame(Some(&image), &detections.inner)
             .map_err(online_error)?;
+        // Only a tracked frame sets the size: a first frame the core refused (too many
+        // detections) no longer bound the tracker to its size, refusing every other size.
+        self.size = Some(size);
         shapes_js(shapes)
     }
 
@@ -247,6 +279,11 @@ impl Tracker {
     /// report; if it throws, `finish` throws an `Error` carrying that message, and the tracker
     /// is left as it was (`finish` may be called again). After `finish` the tracker is final:
     /// `tracks()` returns the result and `update` refuses new frames.
+    ///
+    /// Inside `progress` the tracker is busy: calling its methods throws an `Error`
+    /// ("recursive use of an object"), which, uncaught, ends `finish` as above, the tracker
+    /// unchanged. `free()` there throws too, but takes effect: the tracker is released when
+    /// `finish` returns (nothing is used after it is freed, and nothing leaks).
     pub fn finish(
         &mut self,
         progress: Option<ProgressCallback>,
@@ -283,6 +320,14 @@ impl Tracker {
                 message: thrown_message(&e),
             }));
         }
+        // The conversion below can only fail on an id JS numbers cannot hold; checked while
+        // nothing has changed, so every error leaves the tracker as it was.
+        if let Some(s) = result.shapes.iter().find(|s| s.id > MAX_JS_ID) {
+            return Err(js_error(BindingError::Invalid(format!(
+                "track id {} is beyond 2^53: JavaScript numbers cannot hold it",
+                s.id
+            ))));
+        }
 
         let added: Vec<Record> = self.inner.apply(&result).iter().map(record_of).collect();
         self.finished = true;
@@ -296,10 +341,27 @@ impl Tracker {
     }
 }
 
+/// Largest integer a JS number holds exactly (`Number.MAX_SAFE_INTEGER`).
+const MAX_JS_ID: u64 = (1 << 53) - 1;
+
 impl Tracker {
+    /// This tracker with its history capped at `cap` shapes instead of [`MAX_KEPT_SHAPES`]
+    /// (tests reach the cap with it; a host with less memory can lower it).
+    pub fn with_history_cap(mut self, cap: usize) -> Self {
+        self.cap = cap;
+        self
+    }
+
+    /// The next frame must be `frame`, and there must be room to keep its shapes.
     fn check_next(&self, frame: u32) -> Result<(), JsValue> {
         if self.finished {
             return Err(js_error(BindingError::Finished));
+        }
+        if self.inner.online_shapes().len() >= self.cap {
+            return Err(js_error(BindingError::HistoryFull {
+                cap: self.cap,
+                frames: self.inner.frames(),
+            }));
         }
         let expected = self.inner.frames() + 1;
         if frame != expected {
@@ -311,18 +373,15 @@ impl Tracker {
         Ok(())
     }
 
-    fn check_size(&mut self, width: u32, height: u32) -> Result<(), JsValue> {
+    /// A frame of `size` may follow the frames tracked so far.
+    fn check_size(&self, size: (u32, u32)) -> Result<(), JsValue> {
         match self.size {
-            None => self.size = Some((width, height)),
-            Some((w, h)) if (w, h) != (width, height) => {
-                return Err(js_error(BindingError::SizeChanged {
-                    expected: (w, h),
-                    got: (width, height),
-                }))
-            }
-            Some(_) => {}
+            Some(expected) if expected != size => Err(js_error(BindingError::SizeChanged {
+                expected,
+                got: size,
+            })),
+            _ => Ok(()),
         }
-        Ok(())
     }
 }
 
