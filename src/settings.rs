@@ -14,12 +14,15 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::Value;
 
-/// A number as error messages print it: at most six significant digits, integers whole.
+/// A number as error messages print it: what the person wrote, not binary noise.
 ///
 /// A setting is often an `f32` (the detectors'), and `0.3_f32 as f64` prints as
 /// `0.30000001192092896`; a computed value as `0.30000000000000004`. Neither is what the person
-/// wrote, and both hide the point of the message. Very large and very small values use an
-/// exponent (`1e300`, not three hundred digits).
+/// wrote, and both hide the point of the message. A value that is exactly an `f32` prints as
+/// the shortest text that reads back to that `f32` (`0.3`, and `1.0000001` stays itself, so
+/// a value just outside a range never prints as its bound); any other is rounded to 15
+/// significant digits, the precision an `f64` holds for any decimal. Integers print whole,
+/// very large and very small values with an exponent (`1e300`, not three hundred digits).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Short(pub f64);
 
@@ -39,9 +42,17 @@ impl std::fmt::Display for Short {
         if v.fract() == 0.0 && v.abs() < 1e15 {
             return write!(f, "{}", v as i64);
         }
-        // Rounded to six significant digits, then the shortest text of the rounded value.
-        let r: f64 = format!("{v:.5e}").parse().unwrap_or(v);
-        if (1e-4..1e15).contains(&r.abs()) {
+        let plain = (1e-4..1e15).contains(&v.abs());
+        let single = v as f32;
+        if f64::from(single) == v {
+            return if plain {
+                write!(f, "{single}")
+            } else {
+                write!(f, "{single:e}")
+            };
+        }
+        let r: f64 = format!("{v:.14e}").parse().unwrap_or(v);
+        if plain {
             write!(f, "{r}")
         } else {
             write!(f, "{r:e}")
@@ -149,6 +160,10 @@ mod tests {
         assert_eq!(p(0.3_f32 as f64), "0.3");
         assert_eq!(p(0.1 + 0.2), "0.3");
         assert_eq!(p(1.3_f32 as f64), "1.3");
+        // Just outside a range stays outside it in the message.
+        assert_eq!(p(1.0000001_f32 as f64), "1.0000001");
+        assert_eq!(p(0.123456789), "0.123456789");
+        assert_eq!(p(1000.0000001), "1000.0000001");
         assert_eq!(p(1048577.0), "1048577");
         assert_eq!(p(-2.5), "-2.5");
         assert_eq!(p(1e300), "1e300");
