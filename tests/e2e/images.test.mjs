@@ -179,6 +179,40 @@ test('a folder pick opens the folder\'s frames and names the exports after it', 
   await page.close();
 });
 
+test('at speed 1× the first play-through is paced at the source\'s frame rate', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const files = readdirSync(BAG)
+    .filter((f) => f.endsWith('.jpg'))
+    .sort()
+    .slice(0, FRAMES)
+    .map((f) => join(BAG, f));
+  await page.setInputFiles('#file-images', files);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  assert.equal(await page.inputValue('#speed'), 'realtime');
+  // A slow source (a 3 fps time-lapse): any machine tracks these small frames faster than
+  // that, so an unpaced first play-through shows up at any load.
+  const fps = 3;
+  await page.evaluate((r) => {
+    /** @type {any} */ (window).__shapetrack.app.source.fps = r;
+  }, fps);
+  await page.keyboard.press('Space');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 3);
+  // An upper bound on the rate (a busy machine only makes it slower: it cannot fail for want
+  // of speed).
+  const [a, t1] = await page.evaluate(() => [/** @type {any} */ (window).__shapetrack.state().processed, performance.now()]);
+  await new Promise((r) => setTimeout(r, 2000));
+  const [b, t2] = await page.evaluate(() => [/** @type {any} */ (window).__shapetrack.state().processed, performance.now()]);
+  const rate = ((b - a) * 1000) / (t2 - t1);
+  console.log(`paced: ${b - a} frames in ${(t2 - t1).toFixed(0)} ms (${rate.toFixed(1)} fps) from a ${fps} fps source`);
+  assert.ok(b - a <= ((t2 - t1) / 1000) * fps * 1.2 + 2, `${b - a} frames in ${(t2 - t1).toFixed(0)} ms (${rate.toFixed(1)} fps) from a ${fps} fps source`);
+  await page.keyboard.press('Space');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

@@ -35,6 +35,12 @@ export async function track(app, { until, display }) {
   const inflight = [];
   let n = app.session.processed + 1;
   let lastDraw = 0;
+  // At speed 1× a played-through file is shown at its own frame rate, the first time through
+  // too (the camera paces itself); the frames are still posted two ahead, so the worker keeps
+  // working while the page waits.
+  const paced = display === 'every' && app.speed === 'realtime' && src.kind !== 'webcam';
+  const t0 = performance.now();
+  const f0 = n;
   while (true) {
     while (app.playing && inflight.length < 2 && n <= until) {
       // Offline, paint a frame now and then so the labeller sees progress.
@@ -52,6 +58,7 @@ export async function track(app, { until, display }) {
       app.cur = res.frame;
       app.render();
     }
+    if (paced) await app.pace(t0, res.frame - f0 + 1);
     const frames = app.session.frames;
     progress.value = frames ? (ONLINE_SHARE * res.frame) / frames : 0;
     if (src.kind === 'webcam' && !app.playing) break;
