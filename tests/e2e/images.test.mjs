@@ -38,6 +38,8 @@ test('an image sequence is tracked, stepped and exported in every format', async
   await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().processed === n, FRAMES, { timeout: 60_000 });
   st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   assert.equal(st.processed, FRAMES);
+  // The end of the run is said, with what there is.
+  await page.waitForFunction((n) => new RegExp(`^done: ${n} frames tracked, \\d+ tracks?`).test(/** @type {any} */ (window).__shapetrack.state().status), FRAMES);
   assert.ok(st.ids.length > 0, 'the background subtractor found the moving bag');
 
   // Step back with the keyboard: the frame shown follows.

@@ -49,16 +49,24 @@ export async function run(app) {
   }
   const t0 = performance.now();
   const f0 = app.cur;
+  let tracked = false;
   while (app.playing) {
     const next = app.cur + 1;
     if (session.frames && next > session.frames) break;
     if (!session.needsTracking(next)) {
       await app.show(next);
     } else {
+      tracked = true;
       await app.track({ until: session.frames || Infinity, display: 'every' });
       if (app.source?.kind !== 'webcam') break;
     }
     if (app.speed === 'realtime') await app.pace(t0, app.cur - f0);
+  }
+  // Played through to the end: say it is done (and what there is), or the last frame's
+  // message would stay as if more were coming.
+  if (tracked && app.playing && session.frames && app.cur >= session.frames && app.mode === 'online') {
+    const n = app.model.table.ids().length;
+    app.status(`done: ${session.frames} frames tracked, ${n} track${n === 1 ? '' : 's'} — export them (E), or fix them first`);
   }
 }
 

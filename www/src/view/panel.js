@@ -110,7 +110,8 @@ export class Panel {
         ['here', here ? `${Math.round(here.bbox.w)}×${Math.round(here.bbox.h)} at ${Math.round(here.bbox.x)},${Math.round(here.bbox.y)}${here.interpolated ? ', filled in' : ''}` : 'not in this frame'],
       ];
       const filled = recs.filter((r) => r.interpolated).length;
-      if (filled) facts.splice(2, 0, ['filled in', `${filled} frame${filled === 1 ? '' : 's'} (offline pass)`]);
+      // Filled in by the online tracker's coasting or by the offline pass: not seen, either way.
+      if (filled) facts.splice(2, 0, ['filled in', `${filled} frame${filled === 1 ? '' : 's'} (not seen: bridged between sightings)`]);
       this.facts.replaceChildren(...facts.flatMap(([k, v]) => [h('dt', {}, [k]), h('dd', {}, [v])]));
       const two = b !== null && table.has(b);
       this.buttons.merge.disabled = !two;
