@@ -164,6 +164,10 @@ fn a_byte_order_mark_is_accepted() {
     assert!(o.status.success(), "{}", stderr(&o));
     let res = parse_mots(&read_text(&out).unwrap(), "out").unwrap();
     assert!(!res.is_empty() && res.iter().all(|r| r.mask.is_some()));
+    // The mark alone on the first line.
+    std::fs::write(&det, format!("{bom}\n{masks}")).unwrap();
+    let o = track_mots(&det, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
     // A Scalabel JSON file, taken for JSON after the mark.
     let json = dir.join("det.json");
     let labels: Vec<String> = (1..=6)

@@ -20,7 +20,7 @@ use shapetrack::frame::{Frame, Mask, TrackedShape};
 use shapetrack::io::motchallenge::{parse_mot, parse_mots, write_mot, write_mots, SeqInfo};
 use shapetrack::io::scalabel::{self, write_scalabel, Categories};
 use shapetrack::io::{
-    image_files, read_text, write_text, AtomicFile, IoError, PackedRle, Record, Rle,
+    image_files, read_text, strip_bom, write_text, AtomicFile, IoError, PackedRle, Record, Rle,
 };
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase, RleHistory};
 use shapetrack::track::{detections_by_frame, to_records, Config, Preset, Tracker};
@@ -157,7 +157,7 @@ pub fn run(args: Args) -> crate::CliResult {
         let mut lines = open_lines(&args.det)?;
         let mut head = String::new();
         while let Some(l) = line_of(lines.next(), &args.det)? {
-            if !l.trim().is_empty() {
+            if !strip_bom(&l).trim().is_empty() {
                 head = l;
                 break;
             }
