@@ -140,6 +140,30 @@ fn an_all_digit_rle_is_read_as_a_mask_not_a_box() {
 }
 
 #[test]
+fn scalabel_boxes_are_told_from_masks_by_their_records_not_their_text() {
+    // Boxes whose category is "rle" and whose attributes say "counts": once taken for masks
+    // (the mask preset, which tracked nothing in six frames).
+    let dir = scratch("misread_sniff_scalabel");
+    let det = dir.join("det.json");
+    let out = dir.join("out.json");
+    let labels: Vec<String> = (1..=6)
+        .map(|f| {
+            format!(
+                r#"{{"name": "f{f}", "videoName": "v", "frameIndex": {}, "labels": [{{"id": "a", "category": "rle", "attributes": {{"counts": true}}, "box2d": {{"x1": {x}, "y1": 20, "x2": {x2}, "y2": 80}}}}]}}"#,
+                f - 1,
+                x = 10 + 2 * f,
+                x2 = 40 + 2 * f
+            )
+        })
+        .collect();
+    std::fs::write(&det, format!("[{}]", labels.join(","))).unwrap();
+    let o = shapetrack(&["track", "--det", s(&det), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let so = String::from_utf8_lossy(&o.stdout);
+    assert!(so.contains("box mode") && so.contains("shapes=6"), "{so}");
+}
+
+#[test]
 fn a_byte_order_mark_is_accepted() {
     let dir = scratch("misread_bom");
     let out = dir.join("out.txt");
