@@ -91,6 +91,10 @@ test('the demo tracks 1280×720 and the page keeps the tracker’s identities', 
   const s0 = await until((s) => s.processed >= 30);
   assert.deepEqual(s0.size, [1280, 720]);
   assert.equal(s0.source.kind, 'synth');
+  // The Detector menu says what Automatic runs on the demo (its still camera's background
+  // detector), not just "Automatic".
+  assert.equal(await page.inputValue('#detector'), 'auto');
+  assert.match((await page.locator('#detector option[value="auto"]').textContent()) ?? '', /the demo: .*background/i);
 
   const done = await until((s) => !s.playing && s.processed === s.frames);
   assert.equal(done.frames, 600);

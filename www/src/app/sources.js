@@ -73,6 +73,7 @@ export async function openSource(app, src) {
     fps: opened.fps,
   };
   app.source = source;
+  showDetectorInUse(app, src);
   app.detectorChoice = null;
   app.warming = false;
   // A detector with classes names them: the overlay shows them and exports carry them.
@@ -109,6 +110,25 @@ export function detectorFor(app, src) {
 }
 
 /**
+ * Says in the Detector menu what `auto` runs on this source when that is settled before any
+ * frame (the demo: the background detector), so the menu does not read "Automatic" over a
+ * detector it did not choose; any other source shows the plain label (the status line says
+ * what auto chose once it has).
+ * @param {App} app
+ * @param {Source | AnySource | null | undefined} src null: the synthetic demo; undefined: no
+ *   source open
+ */
+export function showDetectorInUse(app, src) {
+  const menu = byId('detector', HTMLSelectElement);
+  const auto = /** @type {HTMLOptionElement | undefined} */ ([...menu.options].find((o) => o.value === 'auto'));
+  if (!auto) return;
+  auto.dataset.label ??= auto.text;
+  const used = src === undefined ? app.detector : detectorFor(app, src);
+  const name = [...menu.options].find((o) => o.value === used)?.dataset.label ?? [...menu.options].find((o) => o.value === used)?.text ?? used;
+  auto.text = app.detector === 'auto' && used !== 'auto' ? `${auto.dataset.label} (the demo: ${name})` : auto.dataset.label;
+}
+
+/**
  * Uses another detector: for the next source, and, while a source is being tracked, from its
  * next frame on (the tracks so far stay; nothing is reopened).
  * @param {App} app
@@ -117,6 +137,7 @@ export function detectorFor(app, src) {
  */
 export async function changeDetector(app, name, label) {
   app.detector = name;
+  showDetectorInUse(app, app.source ?? undefined);
   if (app.session.phase !== 'tracking') {
     app.status(`detector: ${label} (for the next video)`);
     return;

@@ -234,6 +234,6 @@ export function learnedStep(app, l) {
   }
   if (l.failed && !s.failed) {
     s.failed = l.failed;
-    app.status(`learned masks off for app video: ${l.failed}`, true);
+    app.status(`learned masks off for this video: ${l.failed}`, true);
   }
 }
