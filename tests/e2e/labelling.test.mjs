@@ -448,6 +448,9 @@ test('edits not exported are never replaced without a question: demo, import and
   await page.keyboard.press('d');
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().source?.kind === 'synth');
   assert.equal(asked.length, 3, 'no question after the export');
+  // The undo bar no longer names the replaced table's last edit.
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  assert.equal((await page.textContent('#last-edit'))?.trim(), '', 'no "last edit" carried into the new source');
   assert.deepEqual(errors, []);
   await page.close();
 });

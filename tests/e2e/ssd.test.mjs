@@ -423,6 +423,26 @@ test('the worker hands back the detector\'s own output when a step asks for it',
   await page.close();
 });
 
+test('switching to the SSD while the demo plays, then opening frames at once: the switch and the open run in turn', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?speed=max`);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack?.state().processed >= 5, undefined, { timeout: 60_000 });
+  // The switch loads the SSD's files (seconds); the folder is opened while it does.
+  await page.selectOption('#detector', 'ssd');
+  await page.setInputFiles('#file-images', frames().slice(0, 8));
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().source?.kind === 'images', undefined, { timeout: 120_000 });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1, undefined, { timeout: 120_000 });
+  await page.keyboard.press('Space');
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed === 8, undefined, { timeout: 120_000 });
+  const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  assert.doesNotMatch(st.status, /no pixels|error/i, st.status);
+  assert.equal(await page.locator('#status.error').count(), 0, 'no error in the status line');
+  assert.equal(st.detector, 'ssd', 'the new sequence runs the detector picked');
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

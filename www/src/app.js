@@ -102,6 +102,8 @@ export class App {
      */
     this.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, failed: /** @type {string | null} */ (null) };
     this.lastEdit = '';
+    /** The last source or detector change (see `inTurn`). @type {Promise<void>} */
+    this.changes = Promise.resolve();
     /** Live scores, throttled while tracking. */
     this.scorer = new Scorer(() => this.score());
     /** @type {import('./view/panel.js').Scores | null} */
@@ -227,7 +229,25 @@ export class App {
 
   /** @param {Source | null} src */
   openSource(src) {
-    return sources.openSource(this, src);
+    return this.inTurn(() => sources.openSource(this, src));
+  }
+
+  /**
+   * Runs source and detector changes one after another, each to its end: a detector switch
+   * waits seconds for its files, and a source opened meanwhile must not interleave with it
+   * (the switch's resumed play then sent the new source's frames to the old session: "frame
+   * N: no pixels sent" for the whole session). A change that fails does not block the next.
+   * @template T
+   * @param {() => Promise<T>} fn
+   * @returns {Promise<T>}
+   */
+  inTurn(fn) {
+    const run = this.changes.then(fn, fn);
+    this.changes = run.then(
+      () => undefined,
+      () => undefined,
+    );
+    return run;
   }
 
   /** @param {Source | AnySource | null} src null: the synthetic demo */
@@ -240,7 +260,7 @@ export class App {
    * @param {string} label
    */
   changeDetector(name, label) {
-    return sources.changeDetector(this, name, label);
+    return this.inTurn(() => sources.changeDetector(this, name, label));
   }
 
   /** @param {File[]} list */

@@ -46,6 +46,7 @@ export async function importTracks(app, name, text) {
   if (!mayReplace(app, `Importing ${name}`)) return;
   await app.stop();
   app.model.replaceAll(records);
+  app.lastEdit = '';
   if (!app.source) {
     let w = parsed.width ?? 0;
     let h = parsed.height ?? 0;

@@ -83,6 +83,8 @@ export async function openSource(app, src) {
   app.selection = { a: null, b: null };
   app.fps.reset();
   app.model.replaceAll([]);
+  // The undo bar's "last edit" named an edit of the table just replaced.
+  app.lastEdit = '';
   if (source.kind === 'synth') {
     app.gt = new TrackTable();
     app.gtName = 'scene ground truth';
