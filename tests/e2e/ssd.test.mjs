@@ -443,6 +443,44 @@ test('switching to the SSD while the demo plays, then opening frames at once: th
   await page.close();
 });
 
+test('offline before the SSD was ever used: a plain message, and the page is usable (no old frame left up)', async () => {
+  const fresh = await launch();
+  try {
+    const page = await fresh.context.newPage();
+    const errors = watchErrors(page);
+    await page.goto(`${app.server.url}?speed=max`);
+    await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack?.state().processed >= 3, undefined, { timeout: 60_000 });
+    await page.evaluate(async () => {
+      await navigator.serviceWorker.ready;
+      if (!navigator.serviceWorker.controller) {
+        await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
+      }
+    });
+    await fresh.context.setOffline(true);
+    try {
+      await page.selectOption('#detector', 'ssd');
+      await page.setInputFiles('#file-images', frames().slice(0, 4));
+      await page.waitForFunction(() => document.querySelector('#status.error'), undefined, { timeout: 60_000 });
+      const status = (await page.textContent('#status')) ?? '';
+      assert.match(status, /SSD detector could not fetch its files .*only once it has run online/, status);
+      const st = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+      assert.equal(st.source, null, 'the demo, closed for the new source, is not left on screen as if it were it');
+      assert.ok(await page.locator('#empty').isVisible(), 'the start screen shows');
+      // Usable: another detector opens the frames, offline.
+      await page.selectOption('#detector', 'auto');
+      await page.setInputFiles('#file-images', frames().slice(0, 4));
+      await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1, undefined, { timeout: 60_000 });
+    } finally {
+      await fresh.context.setOffline(false);
+    }
+    // The failed open is reported in the status line, not as an uncaught page error.
+    assert.deepEqual(errors.filter((e) => !/could not fetch its files/.test(e)), []);
+    await page.close();
+  } finally {
+    await fresh.close();
+  }
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

@@ -148,3 +148,17 @@ test("the TFLite loader's importScripts stand-in runs the fetched script, for it
     if (!hadSelf) delete g.self;
   }
 });
+
+test('a failure to fetch the SSD files is said plainly; other failures pass unchanged', async () => {
+  const { plainLoadError } = await import('../src/worker/detectors/ssd.js');
+  const raw = new TypeError('Failed to fetch dynamically imported module: http://127.0.0.1/assets/ssd-runtime-x.js');
+  const plain = /** @type {Error} */ (plainLoadError(raw));
+  assert.match(plain.message, /could not fetch its files .*only once it has run online/);
+  assert.equal(plain.cause, raw);
+  for (const m of ['Failed to fetch', 'NetworkError when attempting to fetch resource.', 'http://x/ssd/model.tflite: HTTP 504']) {
+    assert.notEqual(plainLoadError(new Error(m)), undefined);
+    assert.match(/** @type {Error} */ (plainLoadError(new Error(m))).message, /only once it has run online/, m);
+  }
+  const other = new Error('SSD detector: unexpected model input 1,300,300,3 uint8');
+  assert.equal(plainLoadError(other), other);
+});

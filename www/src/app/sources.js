@@ -54,14 +54,28 @@ export async function openSource(app, src) {
   await app.stop();
   if (app.source && app.source.kind !== 'synth') app.source.close();
   app.status(src ? `opening ${src.name}…` : 'starting the demo scene…');
-  const opened = await app.worker.open({
-    source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: app.scene },
-    detector: app.detectorFor(src),
-    ...(app.tracker ? { tracker: app.tracker } : {}),
-    ...(app.offlineSettings ? { offlineSettings: app.offlineSettings } : {}),
-    offline: src?.kind !== 'webcam',
-    learned: app.learnedPolicy,
-  });
+  /** @type {Awaited<ReturnType<App['worker']['open']>>} */
+  let opened;
+  try {
+    opened = await app.worker.open({
+      source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: app.scene },
+      detector: app.detectorFor(src),
+      ...(app.tracker ? { tracker: app.tracker } : {}),
+      ...(app.offlineSettings ? { offlineSettings: app.offlineSettings } : {}),
+      offline: src?.kind !== 'webcam',
+      learned: app.learnedPolicy,
+    });
+  } catch (e) {
+    // The previous source is closed already: leaving its last frame up would look like the
+    // new one opened. Nothing is open now (the tracks stay, they can still be exported), the
+    // start screen shows, and the error says why.
+    src?.close();
+    app.source = null;
+    app.session.close();
+    byId('empty').hidden = false;
+    app.render();
+    throw e;
+  }
   app.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, failed: null };
   /** @type {AnySource} */
   const source = src ?? {

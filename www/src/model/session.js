@@ -69,6 +69,15 @@ export class Session {
     this.report = null;
   }
 
+  /** The source failed to open (or was closed): nothing is being tracked. */
+  close() {
+    this.phase = 'idle';
+    this.frames = 0;
+    this.processed = 0;
+    this.offlineCapable = false;
+    this.report = null;
+  }
+
   /**
    * Tracks were imported: they are final, there is nothing to track (the source, if any,
    * stays open for viewing).

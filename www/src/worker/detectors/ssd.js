@@ -69,6 +69,22 @@ export const SSD_TRACKER = Object.freeze({ high_score: 0.5, new_track_score: 0.6
  * }} LoadedModel  `boxes`/`scores`: indices of the two outputs
  */
 
+/**
+ * A failure to fetch the detector's files, said plainly: offline before the detector was ever
+ * used online, the browser reports only "Failed to fetch dynamically imported module …".
+ * Other failures are passed on as they are.
+ * @param {unknown} e
+ * @returns {unknown}
+ */
+export function plainLoadError(e) {
+  const m = e instanceof Error ? e.message : String(e);
+  if (!/failed to fetch|networkerror|dynamically imported module|load failed|HTTP \d{3}/i.test(m)) return e;
+  return new Error(
+    `the SSD detector could not fetch its files (${m.split('\n')[0]}): they are kept for offline use only once it has run online — connect and pick it again, or choose another detector`,
+    { cause: e },
+  );
+}
+
 /** One model per worker, kept across sessions (it is stateless between frames). */
 /** @type {Promise<LoadedModel> | null} */
 let loading = null;
@@ -252,7 +268,7 @@ export function ssdDetector(options = {}) {
     async init({ core }) {
       loading ??= loadModel().catch((e) => {
         loading = null; // let a later session retry (e.g. once back online)
-        throw e;
+        throw plainLoadError(e);
       });
       model = await loading;
       // The background class ("???") is never reported.
