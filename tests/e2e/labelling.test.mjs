@@ -249,6 +249,9 @@ test('timeline clicks select and seek; split, delete and the help dialog work fr
   // ? opens the shortcut list; keys do not reach the player behind it; Esc closes it.
   await page.keyboard.press('?');
   assert.ok(await page.locator('#help-dialog').isVisible());
+  // It opens at its top, the Keyboard section in view (not scrolled down to its Close button).
+  assert.equal(await page.evaluate(() => /** @type {HTMLElement} */ (document.getElementById('help-dialog')).scrollTop), 0);
+  assert.ok(await page.locator('#help-title').isVisible());
   assert.ok((await page.locator('#help-table tr').count()) >= 20);
   const under = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
   await page.keyboard.press('ArrowRight');
