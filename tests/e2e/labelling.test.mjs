@@ -487,6 +487,35 @@ test('fields and shortcuts: Esc in the new-id field keeps the selection; a short
   await page.close();
 });
 
+test('the layout holds from 1024×768 to 1920×1080 with a track selected: the Tracks card keeps its rows, no card covers another', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  const gt = tudGt();
+  await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
+  const first = (await page.evaluate(() => /** @type {any} */ (window).__shapetrack.state())).ids[0];
+  await page.evaluate((id) => /** @type {any} */ (window).__shapetrack.app.select(id, false), first);
+  for (const [width, height] of [[1024, 768], [1280, 720], [1366, 768], [1920, 1080]]) {
+    await page.setViewportSize({ width, height });
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+    const cards = await page.$$eval('.side > .card', (cs) =>
+      cs.map((c) => {
+        const r = c.getBoundingClientRect();
+        return { id: c.id || c.className, top: r.top, bottom: r.bottom };
+      }),
+    );
+    for (let i = 1; i < cards.length; i++) {
+      assert.ok(cards[i].top >= cards[i - 1].bottom - 0.5, `${width}×${height}: ${cards[i].id} overlaps ${cards[i - 1].id}: ${JSON.stringify(cards)}`);
+    }
+    const list = await page.locator('#track-list').boundingBox();
+    assert.ok(list && list.height >= 100, `${width}×${height}: the track list is ${list?.height} px high`);
+  }
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.ok(app.browser.requests.length > 0, 'requests were recorded');
   assert.deepEqual(app.browser.foreign, []);
