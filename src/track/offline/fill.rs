@@ -50,6 +50,8 @@ pub(crate) fn fill_gaps(
         by_id.entry(s.id).or_default().push(i);
     }
     let history = history_frames(relink, fps);
+    let budget = fill_budget(shapes, areas);
+    let (mut made, mut mask_pixels) = (0u64, 0u64);
     let n = by_id.len().max(1);
     for (done, idx) in by_id.values_mut().enumerate() {
         if done % 64 == 0 {
@@ -73,6 +75,14 @@ pub(crate) fn fill_gaps(
             if cfg.hidden_ratio > 0.0 && is_hide(areas, &idx[..k], &idx[k..], cfg.hidden_ratio) {
                 continue;
             }
+            // Checked before the path is made: `missing` is the input's claim, not yet work.
+            made += u64::from(missing);
+            if made > budget.shapes {
+                return Err(OfflineError::FillBudget {
+                    what: "shapes",
+                    cap: budget.shapes,
+                });
+            }
             let path = match cfg.trajectory {
                 Trajectory::Linear => linear_path(a.centroid, b.centroid, missing),
                 Trajectory::Kalman => {
@@ -85,7 +95,15 @@ pub(crate) fn fill_gaps(
                 let step = j as u32 + 1;
                 let alpha = f64::from(step) / f64::from(missing + 1);
                 let scale_in = image_size.filter(|_| cfg.scale_masks);
-                out.push(filled_shape(a, b, a.frame + step, *c, alpha, scale_in));
+                let s = filled_shape(a, b, a.frame + step, *c, alpha, scale_in);
+                mask_pixels += s.mask.as_ref().map_or(0, |m| m.data().len() as u64);
+                if mask_pixels > budget.mask_pixels {
+                    return Err(OfflineError::FillBudget {
+                        what: "mask pixels",
+                        cap: budget.mask_pixels,
+                    });
+                }
+                out.push(s);
             }
         }
     }
@@ -94,6 +112,44 @@ pub(crate) fn fill_gaps(
         fraction: 1.0,
     });
     Ok(out)
+}
+
+/// How much the fill may make for one input (see [`fill_budget`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FillBudget {
+    /// Most filled shapes.
+    pub shapes: u64,
+    /// Most mask pixels (bitmap bytes) of the filled shapes together.
+    pub mask_pixels: u64,
+}
+
+/// Filled shapes allowed per input shape above the fixed allowance. A gap is filled from the
+/// observed shape before it, so with the default `max_gap` of 10 the fill makes at most 10
+/// shapes per input shape and never reaches this budget; only a wider setting over a sparse
+/// input can.
+pub const FILL_PER_SHAPE: u64 = 16;
+
+/// The fill's budget for `shapes` (with mask areas `areas`): [`MAX_RECORDS`] filled shapes
+/// plus [`FILL_PER_SHAPE`] per input shape, and [`MAX_TOTAL_PIXELS`] mask pixels plus
+/// [`FILL_PER_SHAPE`] times the input's own. The output is thus bounded by what the input
+/// holds, not by what the gaps between its frame numbers claim (issue 65).
+///
+/// [`MAX_RECORDS`]: crate::io::limits::MAX_RECORDS
+/// [`MAX_TOTAL_PIXELS`]: crate::io::limits::MAX_TOTAL_PIXELS
+pub fn fill_budget(shapes: &[TrackedShape], areas: &[Option<u64>]) -> FillBudget {
+    use crate::io::limits::{MAX_RECORDS, MAX_TOTAL_PIXELS};
+    let input_pixels: u64 = shapes
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let bitmap = s.mask.as_ref().map_or(0, |m| m.data().len() as u64);
+            bitmap.max(areas.get(i).copied().flatten().unwrap_or(0))
+        })
+        .fold(0u64, u64::saturating_add);
+    FillBudget {
+        shapes: MAX_RECORDS.saturating_add(FILL_PER_SHAPE.saturating_mul(shapes.len() as u64)),
+        mask_pixels: MAX_TOTAL_PIXELS.saturating_add(FILL_PER_SHAPE.saturating_mul(input_pixels)),
+    }
 }
 
 /// Shapes on each side of a gap whose median mask area is the reference for that end.

@@ -61,6 +61,7 @@
 //!   two real observations.
 
 pub mod appearance;
+pub mod blocks;
 pub mod config;
 pub mod fill;
 pub mod history;
@@ -113,6 +114,20 @@ pub enum OfflineError {
     InvalidFps {
         /// The value given.
         fps: f64,
+    },
+    /// The fill would make more than its budget: more shapes, or more mask pixels, than the
+    /// input justifies (see [`fill::fill_budget`]). A setting such as `fill.max_gap` of 10⁹
+    /// over a sparse input would otherwise allocate what the setting claims, not what the
+    /// input holds.
+    #[error(
+        "fill: the gaps to fill need more than {cap} {what} (the budget for this input); \
+         lower fill.max_gap or fill.max_gap_seconds"
+    )]
+    FillBudget {
+        /// What ran out: "shapes" or "mask pixels".
+        what: &'static str,
+        /// The budget.
+        cap: u64,
     },
     /// A shape handed to [`relink()`] is unusable.
     #[error("shape of id {id} in frame {frame}: {reason}")]

@@ -22,7 +22,6 @@
 use super::appearance::FeatureCache;
 use super::config::{JoinSolver, RelinkConfig};
 use super::{OfflineError, Phase, Progress, SequenceInfo};
-use crate::assign::{self, Unmatched};
 use crate::frame::{BBox, Point, TrackedShape};
 use crate::motion::{ConstantAcceleration, MotionError};
 use nalgebra::{Matrix3, Vector3};
@@ -549,15 +548,14 @@ pub(crate) fn find_joins(
         JoinSolver::Global => {
             let edges: Vec<(usize, usize, f64)> =
                 cands.iter().map(|c| (c.slave, c.master, c.cost)).collect();
-            // Leaving an end unmatched costs ½, so a pair (cost ≤ 1) is always worth taking
-            // unless it displaces cheaper ones: the optimum minimises Σ (cost − 1).
-            let sol =
-                assign::solve_sparse(pieces.len(), pieces.len(), &edges, Unmatched::Cost(0.5))?;
+            let time: Vec<u32> = cands.iter().map(|c| pieces[c.master].first).collect();
+            // In blocks of bounded size: a crowd's one giant component is cut in time.
+            let pairs = super::blocks::solve_in_blocks(pieces.len(), &edges, &time)?;
             let by_pair: std::collections::BTreeMap<(usize, usize), Candidate> =
                 cands.iter().map(|c| ((c.slave, c.master), *c)).collect();
-            sol.matches
+            pairs
                 .iter()
-                .filter_map(|mt| by_pair.get(&(mt.row, mt.col)).copied())
+                .filter_map(|p| by_pair.get(p).copied())
                 .collect()
         }
         JoinSolver::Greedy => {
