@@ -57,3 +57,9 @@ pub fn id_message(id: &str) -> String {
          would be read back as another id)"
     )
 }
+
+/// Most per-frame slots a COCO-video writer lays out for one video: the format lists every
+/// track's boxes frame by frame (`null` where absent), so a track costs the video's length
+/// whatever it holds. 2²⁶ slots is a hundred tracks over 9 hours at 30 fps, about 400 MB of
+/// JSON even when empty.
+pub const MAX_SLOTS: u64 = 1 << 26;

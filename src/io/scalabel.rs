@@ -476,6 +476,11 @@ pub fn to_records(
 /// Frames `1..=num_frames` of video `video` holding `records` (a tracker's output): image names
 /// `<video>-<frame:07>.jpg` (BDD100K's), ids written as `ids` names them (else as integers),
 /// classes as `categories` names them, scores kept, masks as RLE.
+///
+/// Empty frames are listed only up to [`MAX_FRAME`](crate::io::limits::MAX_FRAME): beyond it
+/// (a frame number or `num_frames` no real video reaches) only the frames holding records are
+/// listed, each with its `frameIndex`, so a single record at frame 10⁹ is one frame entry, not
+/// 10⁹ empty ones.
 pub fn from_records(
     records: &[Record],
     video: &str,
@@ -484,19 +489,32 @@ pub fn from_records(
     categories: &Categories,
 ) -> Vec<ScalabelFrame> {
     let n = num_frames.max(records.iter().map(|r| r.frame).max().unwrap_or(0));
-    let mut frames: Vec<ScalabelFrame> = (1..=n)
-        .map(|f| ScalabelFrame {
-            name: Some(format!("{video}-{f:07}.jpg")),
-            video_name: Some(video.to_string()),
-            frame_index: f - 1,
-            labels: Vec::new(),
-            raw: Map::from_iter([("labels".to_string(), Value::Array(Vec::new()))]),
-        })
-        .collect();
+    let empty_frame = |f: u32| ScalabelFrame {
+        name: Some(format!("{video}-{f:07}.jpg")),
+        video_name: Some(video.to_string()),
+        frame_index: f - 1,
+        labels: Vec::new(),
+        raw: Map::from_iter([("labels".to_string(), Value::Array(Vec::new()))]),
+    };
     let mut sorted: Vec<&Record> = records.iter().filter(|r| r.frame >= 1).collect();
     sorted.sort_by_key(|r| (r.frame, r.id));
+    let dense = n <= crate::io::limits::MAX_FRAME;
+    let mut frames: Vec<ScalabelFrame> = if dense {
+        (1..=n).map(empty_frame).collect()
+    } else {
+        Vec::new()
+    };
     for r in sorted {
-        let Some(f) = frames.get_mut(r.frame as usize - 1) else {
+        let slot = if dense {
+            r.frame as usize - 1
+        } else {
+            // Sparse: the records are in frame order, so a new frame is the next entry.
+            if frames.last().is_none_or(|f| f.frame_index != r.frame - 1) {
+                frames.push(empty_frame(r.frame));
+            }
+            frames.len() - 1
+        };
+        let Some(f) = frames.get_mut(slot) else {
             continue;
         };
         let id = ids

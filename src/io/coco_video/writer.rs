@@ -2,6 +2,7 @@
 //! ground-truth form or the results form.
 
 use super::{Category, CocoVideoData, VideoInfo};
+use crate::io::limits::{MAX_FRAME, MAX_SLOTS};
 use crate::io::{IoError, Record};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -51,10 +52,32 @@ fn invalid(message: String) -> IoError {
 }
 
 /// Groups a video's records into per-track, per-frame slots, checking they fit the video.
+/// The format lays out every track over the whole video, so the slots (tracks × length) are
+/// checked against [`MAX_FRAME`] and [`MAX_SLOTS`] before any is made: a length is a claim,
+/// and one record in a video of 10⁹ frames would otherwise be gigabytes of `null`s.
 fn tracks_of<'r>(
     video: &VideoInfo,
     records: &'r [Record],
 ) -> Result<BTreeMap<i64, Vec<Option<&'r Record>>>, IoError> {
+    if video.length > MAX_FRAME {
+        return Err(invalid(format!(
+            "video {} has {} frames, beyond the cap of 2^20 frames ({MAX_FRAME}) a COCO-video \
+             file may lay out",
+            video.id, video.length
+        )));
+    }
+    let ids: std::collections::BTreeSet<i64> = records.iter().map(|r| r.id).collect();
+    let slots = ids.len() as u64 * u64::from(video.length);
+    if slots > MAX_SLOTS {
+        return Err(invalid(format!(
+            "video {} would need {} tracks × {} frames = {slots} slots, beyond the cap of \
+             2^26 ({MAX_SLOTS}) a COCO-video file may lay out (it lists every track's boxes \
+             frame by frame)",
+            video.id,
+            ids.len(),
+            video.length
+        )));
+    }
     let mut tracks: BTreeMap<i64, Vec<Option<&Record>>> = BTreeMap::new();
     for r in records {
         if r.frame < 1 || r.frame > video.length {
