@@ -171,8 +171,9 @@ impl Categories {
 
     /// The name of class `c` (`None` for −1 and unknown classes).
     pub fn name(&self, c: i32) -> Option<&str> {
-        usize::try_from(c - 1)
-            .ok()
+        // Checked: `i32::MIN - 1` overflows (a class a MOT file can hold).
+        c.checked_sub(1)
+            .and_then(|k| usize::try_from(k).ok())
             .and_then(|k| self.names.get(k))
             .map(String::as_str)
     }
