@@ -20,7 +20,8 @@
 //!
 //! Besides the readers, the surfaces added since (issue 65, class 8): image headers (PNG and
 //! JPEG frames, PNG instance maps), the writers' inputs (records built from the bytes), and
-//! the detectors built from settings JSON and run on small frames.
+//! the detectors built from settings JSON and run on small frames. The wasm API's call
+//! sequences (what the worker sends) are fuzzed in Node: `tests/wasm-node/sequence-fuzz.test.mjs`.
 // A native suite (`cargo test`); for wasm32 (`wasm-pack test --node`) it compiles to nothing:
 // the wasm suites are the `wasm_*` and `*_wasm` files.
 #![cfg(not(target_arch = "wasm32"))]
