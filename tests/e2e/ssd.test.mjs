@@ -481,6 +481,55 @@ test('offline before the SSD was ever used: a plain message, and the page is usa
   }
 });
 
+test('the object filter: only the classes asked for are tracked, and an unknown class is named', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0&speed=max`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  assert.equal(await page.locator('#det-objects').isVisible(), false, 'no filter for the automatic detector');
+  await page.selectOption('#detector', 'ssd-moving');
+  assert.ok(await page.locator('#det-objects').isVisible(), 'the filter shows for an object detector');
+  await page.fill('#det-classes', 'Person, bicycle');
+  await page.press('#det-classes', 'Tab');
+  const files = frames().slice(0, 8);
+  await page.setInputFiles('#file-images', files);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1, undefined, { timeout: 120_000 });
+  await page.keyboard.press('Space');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().processed === n, files.length, { timeout: 120_000 });
+  const labels = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.labels);
+  const id = (/** @type {string} */ name) => labels.find((/** @type {any} */ l) => l.name === name)?.class;
+  /** @type {Array<{ class: number }>} */
+  let records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  assert.ok(records.every((r) => r.class === id('Person') || r.class === id('Bicycle')), `only people and bicycles: ${[...new Set(records.map((r) => r.class))]}`);
+  assert.ok(!records.some((r) => r.class === id('Car')), 'the car is filtered out');
+  // The same frames with cars only: the car is there.
+  await page.evaluate(() => {
+    /** @type {any} */ (window).__before = /** @type {any} */ (window).__shapetrack.app.source;
+  });
+  await page.fill('#det-classes', 'car');
+  await page.press('#det-classes', 'Tab');
+  await page.setInputFiles('#file-images', files);
+  // The new source (opened once the filter's change has landed), not the last one's count.
+  await page.waitForFunction(
+    () => {
+      const w = /** @type {any} */ (window);
+      return w.__shapetrack.app.source !== w.__before && w.__shapetrack.state().processed >= 1;
+    },
+    undefined,
+    { timeout: 120_000 },
+  );
+  await page.keyboard.press('Space');
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().processed === n, files.length, { timeout: 120_000 });
+  records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+  assert.ok(records.length > 0 && records.every((r) => r.class === id('Car')), `cars only: ${[...new Set(records.map((r) => r.class))]}`);
+  // A class the model does not know is named in the status line.
+  await page.fill('#det-classes', 'unicorn');
+  await page.press('#det-classes', 'Tab');
+  await page.waitForFunction(() => /no class "unicorn"/.test(document.getElementById('status')?.textContent ?? ''), undefined, { timeout: 60_000 });
+  assert.deepEqual(errors.filter((e) => !/unicorn/.test(e)), []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

@@ -250,6 +250,11 @@ export class App {
     return run;
   }
 
+  /** Shows the object detectors' class and score filter when one is picked. */
+  showObjectFilter() {
+    sources.showObjectFilter(this);
+  }
+
   /** @param {Source | AnySource | null} src null: the synthetic demo */
   detectorFor(src) {
     return sources.detectorFor(this, src);

@@ -162,3 +162,12 @@ test('a failure to fetch the SSD files is said plainly; other failures pass unch
   const other = new Error('SSD detector: unexpected model input 1,300,300,3 uint8');
   assert.equal(plainLoadError(other), other);
 });
+
+test('the SSD class filter: names in any case, none means all, an unknown name is an error naming it', async () => {
+  const { keptClasses } = await import('../src/worker/detectors/ssd.js');
+  const labels = ['', 'Person', 'Car', 'Footwear'];
+  assert.equal(keptClasses(labels, undefined), null);
+  assert.equal(keptClasses(labels, [' ', '']), null);
+  assert.deepEqual([...(keptClasses(labels, ['person', ' CAR ']) ?? [])].sort(), [1, 2]);
+  assert.throws(() => keptClasses(labels, ['unicorn']), /no class "unicorn"/);
+});

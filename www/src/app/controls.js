@@ -65,6 +65,16 @@ export function bindControls(app) {
       .then(() => app.changeDetector(det.value, det.selectedOptions[0]?.text ?? det.value))
       .catch((e) => app.fail(e));
   });
+  app.showObjectFilter();
+  // The object filter applies from the next frame while tracking (the detector is set again,
+  // its model kept), else to the next source.
+  for (const id of ['det-classes', 'det-score']) {
+    byId(id, HTMLInputElement).addEventListener('change', () => {
+      Promise.resolve()
+        .then(() => app.changeDetector(det.value, det.selectedOptions[0]?.text ?? det.value))
+        .catch((e) => app.fail(e));
+    });
+  }
   const learned = byId('det-learned', HTMLInputElement);
   learned.addEventListener('change', () => {
     app.learnedPolicy = learned.checked ? 'keyframes' : 'off';

@@ -60,6 +60,7 @@ export async function openSource(app, src) {
     opened = await app.worker.open({
       source: src ? { kind: 'frames', width: src.width, height: src.height, fps: src.fps } : { kind: 'synth', preset: app.scene },
       detector: app.detectorFor(src),
+      detectorOptions: detectorOptions(app.detectorFor(src)),
       ...(app.tracker ? { tracker: app.tracker } : {}),
       ...(app.offlineSettings ? { offlineSettings: app.offlineSettings } : {}),
       offline: src?.kind !== 'webcam',
@@ -92,6 +93,7 @@ export async function openSource(app, src) {
   app.warming = false;
   // A detector with classes names them: the overlay shows them and exports carry them.
   if (opened.classes.length) app.labels = opened.classes.flatMap((name, i) => (name ? [{ class: i, name }] : []));
+  offerClasses(opened.classes);
   app.session.open({ frames: source.frames ?? 0, offlineCapable: opened.offline });
   app.cur = 0;
   app.selection = { a: null, b: null };
@@ -125,6 +127,47 @@ export function detectorFor(app, src) {
   return app.detector === 'auto' && (!src || src.kind === 'synth') ? 'background' : app.detector;
 }
 
+/** The object detectors, whose classes and scores the page's filter sets. */
+const OBJECT_DETECTORS = new Set(['ssd', 'ssd-moving', 'moving-ssd']);
+
+/**
+ * The options of detector `name` from the page's object filter (classes kept, lowest score):
+ * undefined when it sets nothing or the detector has no classes. A score outside [0, 1] is
+ * refused here, naming the field.
+ * @param {string} name
+ * @returns {Record<string, unknown> | undefined}
+ */
+export function detectorOptions(name) {
+  if (!OBJECT_DETECTORS.has(name)) return undefined;
+  const classes = byId('det-classes', HTMLInputElement)
+    .value.split(',')
+    .map((c) => c.trim())
+    .filter((c) => c);
+  const text = byId('det-score', HTMLInputElement).value.trim();
+  const minScore = text === '' ? undefined : Number(text);
+  if (minScore !== undefined && !(minScore >= 0 && minScore <= 1)) throw new Error(`Min score must be between 0 and 1, not ${text}`);
+  const ssd = { ...(classes.length ? { classes } : {}), ...(minScore !== undefined ? { minScore } : {}) };
+  if (!Object.keys(ssd).length) return undefined;
+  return name === 'moving-ssd' ? { ssd } : ssd;
+}
+
+/**
+ * The object filter's suggestions: the detector's class names (none for a detector without).
+ * @param {string[]} classes by index, '' for classes never reported
+ */
+function offerClasses(classes) {
+  const list = byId('det-class-list');
+  list.replaceChildren(...classes.filter((c) => c).map((c) => Object.assign(document.createElement('option'), { value: c })));
+}
+
+/**
+ * Shows the object filter when the Detector menu holds an object detector.
+ * @param {App} app
+ */
+export function showObjectFilter(app) {
+  byId('det-objects').hidden = !OBJECT_DETECTORS.has(app.detector);
+}
+
 /**
  * Says in the Detector menu what `auto` runs on this source when that is settled before any
  * frame (the demo: the background detector), so the menu does not read "Automatic" over a
@@ -153,6 +196,7 @@ export function showDetectorInUse(app, src) {
  */
 export async function changeDetector(app, name, label) {
   app.detector = name;
+  showObjectFilter(app);
   showDetectorInUse(app, app.source ?? undefined);
   if (app.session.phase !== 'tracking') {
     app.status(`detector: ${label} (for the next video)`);
@@ -161,10 +205,11 @@ export async function changeDetector(app, name, label) {
   // Frames in flight finish with the old detector; the switch lands between two frames.
   const wasPlaying = app.playing;
   await app.stop();
-  const { classes } = await app.worker.setDetector(app.detectorFor(app.source));
+  const { classes } = await app.worker.setDetector(app.detectorFor(app.source), detectorOptions(app.detectorFor(app.source)));
   app.detectorChoice = null;
   app.warming = false;
   if (classes.length) app.labels = classes.flatMap((n, i) => (n ? [{ class: i, name: n }] : []));
+  offerClasses(classes);
   app.status(`detector: ${label} from frame ${app.session.processed + 1}`);
   if (wasPlaying) app.play();
 }

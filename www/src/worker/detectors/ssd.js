@@ -33,12 +33,14 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   background?: import('../../../pkg/shapetrack.js').BackgroundSettings,
  *   refine?: boolean | import('../../../pkg/shapetrack.js').RefineSettings,
  *   maxRefined?: number,
+ *   classes?: string[],
  * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
  *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the
  *   background subtractor's mask is not used (default 0.2); `perClassNms`: suppress overlaps
  *   only within a class; `refine`: refine boxes into masks (default true; an object gives
  *   `RefineConfig` settings, `false` keeps filled boxes); `maxRefined`: most boxes refined per
- *   frame (default MAX_REFINED)
+ *   frame (default MAX_REFINED); `classes`: the class names kept (any case; absent or empty:
+ *   all), a name the model does not know is an error at init
  */
 
 /**
@@ -83,6 +85,24 @@ export function plainLoadError(e) {
     `the SSD detector could not fetch its files (${m.split('\n')[0]}): they are kept for offline use only once it has run online — connect and pick it again, or choose another detector`,
     { cause: e },
   );
+}
+
+/**
+ * The class indices to keep for `wanted` names (any case), or null for all.
+ * @param {string[]} labels the model's class names by index ('' for classes never reported)
+ * @param {string[] | undefined} wanted
+ * @returns {Set<number> | null}
+ */
+export function keptClasses(labels, wanted) {
+  const names = (wanted ?? []).map((n) => n.trim().toLowerCase()).filter((n) => n);
+  if (!names.length) return null;
+  const keep = new Set();
+  for (const n of names) {
+    const i = labels.findIndex((l) => l && l.toLowerCase() === n);
+    if (i < 0) throw new Error(`SSD detector: no class "${n}" (it knows ${labels.filter((l) => l).length} classes, e.g. ${labels.filter((l) => l).slice(0, 5).join(', ')})`);
+    keep.add(i);
+  }
+  return keep;
 }
 
 /** One model per worker, kept across sessions (it is stateless between frames). */
@@ -222,8 +242,11 @@ export function ssdDetector(options = {}) {
   const minFill = options.minFill ?? 0.2;
   const maxRefined = options.maxRefined ?? MAX_REFINED;
   if (!(Number.isInteger(maxRefined) && maxRefined >= 0)) throw new Error(`SSD detector: maxRefined must be a whole number ≥ 0, not ${maxRefined}`);
+  if (!(typeof minScore === 'number' && minScore >= 0 && minScore <= 1)) throw new Error(`SSD detector: minScore must be in [0, 1], not ${minScore}`);
   /** @type {LoadedModel | null} */
   let model = null;
+  /** @type {Set<number> | null} the classes kept (null: all) */
+  let keep = null;
   /** @type {Core | null} */
   let wasm = null;
   /** @type {import('../../../pkg/shapetrack.js').BoxRefiner | null} */
@@ -273,6 +296,7 @@ export function ssdDetector(options = {}) {
       model = await loading;
       // The background class ("???") is never reported.
       detector.classes = model.labels.map((l, i) => (DECODE.ignoreClasses.includes(i) ? '' : l));
+      keep = keptClasses(detector.classes, options.classes);
       if (!moving) {
         bg = new core.BackgroundDetector(options.background);
       }
@@ -290,7 +314,10 @@ export function ssdDetector(options = {}) {
       if (!runner.infer()) throw new Error(`SSD inference failed on frame ${frame.index}`);
       const outputs = runner.getOutputs();
       const found = decode(outputs[model.boxes].data(), outputs[model.scores].data(), model.anchors, { ...DECODE, minScore });
-      const kept = nms(found, { iou: NMS.iou, maxDetections: NMS.maxDetections, perClass: options.perClassNms ?? false });
+      const all = nms(found, { iou: NMS.iou, maxDetections: NMS.maxDetections, perClass: options.perClassNms ?? false });
+      // After the suppression: a box of an unwanted class that overlaps a wanted one is not
+      // there to take its place either way, and the wanted one was kept over it or not.
+      const kept = keep ? all.filter((c) => keep?.has(c.class)) : all;
 
       let fgImage = null;
       if (bg) {
