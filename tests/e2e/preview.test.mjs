@@ -8,7 +8,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
-import { existsSync, mkdirSync } from 'node:fs';
+import { existsSync, mkdirSync, readFileSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { DIST, OUT, ROOT, launch, watchErrors } from './harness.mjs';
 
@@ -91,6 +91,66 @@ test('after one visit to the preview server the app comes up styled and working 
   } finally {
     await browser.context.setOffline(false);
   }
+  assert.deepEqual(errors, []);
+  await page.close();
+});
+
+/** The scripted walk-through's screenshots, for review (target/e2e/walkthrough/). */
+const WALK = join(OUT, 'walkthrough');
+const BAG = join(ROOT, '..', 'shared', 'data', 'vot-bag');
+
+test('a newcomer\'s walk through www/README.md "How to label a video", on the production build', async () => {
+  assert.ok(browser);
+  mkdirSync(WALK, { recursive: true });
+  const page = await browser.context.newPage();
+  await page.setViewportSize({ width: 1280, height: 720 });
+  const errors = watchErrors(page);
+  const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  const shot = (/** @type {string} */ name) => page.screenshot({ path: join(WALK, `${name}.png`) });
+
+  // The page opens on the demo, which plays.
+  await page.goto(URL_);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack?.state().processed >= 10, undefined, { timeout: 60_000 });
+  await shot('01-demo');
+
+  // 1. Leave the detector on Automatic, the mode Online; open a folder of frames and play it.
+  assert.equal(await page.inputValue('#detector'), 'auto');
+  await page.selectOption('#speed', 'max');
+  await page.setInputFiles('#file-folder', BAG);
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().source?.kind === 'images', undefined, { timeout: 60_000 });
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().processed >= 1);
+  assert.equal((await state()).source.name, 'vot-bag');
+  await shot('02-folder-opened');
+  await page.keyboard.press('Space');
+  const frames = readdirSync(BAG).filter((f) => f.endsWith('.jpg')).length;
+  await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().status.startsWith(`done: ${n} frames tracked`), frames, { timeout: 300_000 });
+  await shot('03-tracked');
+
+  // 2. The timeline has a row per track; 3. select one in the track list and renumber it (N).
+  const ids = (await state()).ids;
+  assert.ok(ids.length >= 1, 'the bag was tracked');
+  await page.click('#track-list li[data-id]');
+  const picked = (await state()).selection.a;
+  assert.ok(picked !== null, 'a click on a row selects its track');
+  await page.keyboard.press('n');
+  await page.fill('#renumber-input', '500');
+  await page.press('#renumber-input', 'Enter');
+  assert.ok((await state()).ids.includes(500));
+  await shot('04-renumbered');
+
+  // 4. ? shows the shortcuts and the legend.
+  await page.keyboard.press('?');
+  assert.ok(await page.locator('#help-title').isVisible());
+  await shot('05-help');
+  await page.keyboard.press('Escape');
+
+  // 5. Export MOT: the file is named after the folder and holds the renumbered track.
+  await page.selectOption('#export-format', 'mot');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export')]);
+  assert.match(download.suggestedFilename(), /^vot-bag\./);
+  const text = readFileSync(await download.path(), 'utf8');
+  assert.ok(text.split('\n').some((l) => l.split(',')[1] === '500'), 'track 500 is in the export');
+  await shot('06-exported');
   assert.deepEqual(errors, []);
   await page.close();
 });
