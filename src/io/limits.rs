@@ -63,3 +63,13 @@ pub fn id_message(id: &str) -> String {
 /// whatever it holds. 2²⁶ slots is a hundred tracks over 9 hours at 30 fps, about 400 MB of
 /// JSON even when empty.
 pub const MAX_SLOTS: u64 = 1 << 26;
+
+/// Most vertices of one VOT polygon region. The exact overlap sweeps every edge at every
+/// vertex and crossing, so its work grows with the cube of the vertices; VOT's polygons are
+/// rotated boxes (4 vertices), and a mask traced to a polygon has a few hundred.
+pub const MAX_POLYGON_VERTICES: usize = 1024;
+
+/// Most vertices of a VOT polygon that crosses itself. A self-crossing polygon of `n`
+/// vertices can cross itself `n²/2` times, each crossing a sweep event over every edge;
+/// above this a polygon must be simple (a bow-tie of 4 vertices is still read).
+pub const MAX_SELF_CROSSING_VERTICES: usize = 64;

@@ -14,7 +14,7 @@
 //! fine. `anchor.value` files (one number a line: > 0 forward anchor, < 0 backward) are read
 //! by [`parse_anchor_values`].
 
-use super::limits::MAX_TOTAL_PIXELS;
+use super::limits::{MAX_POLYGON_VERTICES, MAX_SELF_CROSSING_VERTICES, MAX_TOTAL_PIXELS};
 use super::rle::{bitmap_runs, for_each_run_pixel, runs_extent};
 use super::{IoError, Rle};
 use crate::frame::{BBox, Mask, Point};
@@ -235,9 +235,11 @@ fn parse_region_counted(
         4 => Ok(Region::Rectangle(BBox::new(
             nums[0], nums[1], nums[2], nums[3],
         ))),
-        n if n >= 6 && n % 2 == 0 => Ok(Region::Polygon(
-            nums.chunks(2).map(|c| Point::new(c[0], c[1])).collect(),
-        )),
+        n if n >= 6 && n % 2 == 0 => {
+            let points: Vec<Point> = nums.chunks(2).map(|c| Point::new(c[0], c[1])).collect();
+            check_polygon(&points, file, line, s)?;
+            Ok(Region::Polygon(points))
+        }
         n => Err(IoError::parse(
             file,
             line,
@@ -246,6 +248,67 @@ fn parse_region_counted(
             s,
         )),
     }
+}
+
+/// Refuses a polygon whose exact overlap would cost more than the caps allow: more than
+/// [`MAX_POLYGON_VERTICES`], or more than [`MAX_SELF_CROSSING_VERTICES`] and crossing itself
+/// (the sweep's events grow with the crossings, the work with events × edges).
+fn check_polygon(points: &[Point], file: &str, line: usize, s: &str) -> Result<(), IoError> {
+    let n = points.len();
+    if n > MAX_POLYGON_VERTICES {
+        return Err(IoError::parse(
+            file,
+            line,
+            2 * MAX_POLYGON_VERTICES + 1,
+            format!("a polygon of at most {MAX_POLYGON_VERTICES} vertices (it has {n})"),
+            s,
+        ));
+    }
+    if n > MAX_SELF_CROSSING_VERTICES && crosses_itself(points) {
+        return Err(IoError::parse(
+            file,
+            line,
+            1,
+            format!(
+                "a polygon that does not cross itself (one of {n} vertices does; above \
+                 {MAX_SELF_CROSSING_VERTICES} vertices polygons must be simple)"
+            ),
+            s,
+        ));
+    }
+    Ok(())
+}
+
+/// Whether two non-adjacent edges of the closed polygon `p` cross properly (`O(n²)`, run only
+/// on polygons above [`MAX_SELF_CROSSING_VERTICES`] and at most [`MAX_POLYGON_VERTICES`]).
+fn crosses_itself(p: &[Point]) -> bool {
+    let n = p.len();
+    let orient = |a: Point, b: Point, c: Point| {
+        let d = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+        if d > 0.0 {
+            1
+        } else if d < 0.0 {
+            -1
+        } else {
+            0
+        }
+    };
+    let edge = |i: usize| (p[i], p[(i + 1) % n]);
+    for i in 0..n {
+        let (a, b) = edge(i);
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue; // adjacent through the closing edge
+            }
+            let (c, d) = edge(j);
+            let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+            let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+            if o1 * o2 < 0 && o3 * o4 < 0 {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// Parses a whole region file (one region a line; blank lines other than a trailing one are
