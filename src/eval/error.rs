@@ -69,6 +69,18 @@ pub enum Problem {
         /// The repeated id.
         id: i64,
     },
+    /// More boxes of one side in one frame than the cap
+    /// ([`MAX_BOXES_PER_FRAME`](crate::io::limits::MAX_BOXES_PER_FRAME)): the frame's
+    /// similarity matrix and matching would grow with the file's claim, not with a scene.
+    #[error("frame {frame} holds {count} boxes on this side, beyond the cap of {max} per frame")]
+    TooManyBoxes {
+        /// 1-based frame.
+        frame: u32,
+        /// Boxes of this side in the frame.
+        count: usize,
+        /// The cap.
+        max: usize,
+    },
     /// A frame outside `1..=num_frames` (`seqLength`).
     #[error("frame {frame} is outside the sequence's frames 1..={num_frames} (seqLength)")]
     InvalidTimestep {

@@ -4,6 +4,7 @@
 use super::error::{EvalError, Location, Problem, Side};
 use super::masks;
 use super::sequence::{Assigner, SequenceBuilder, SequenceData};
+use crate::io::limits::MAX_BOXES_PER_FRAME;
 pub use crate::io::sequence::{Origin, SequenceInput};
 use crate::io::{Record, Rle};
 use serde::{Deserialize, Serialize};
@@ -270,6 +271,20 @@ pub fn prepare(input: &SequenceInput, config: &EvalConfig) -> Result<SequenceDat
         }
     }
     let by = ByFrame::new(&input.gt, &input.results);
+    // Before any per-frame work: the matrices and matchings below grow with these counts.
+    for (i, &frame) in by.frames.iter().enumerate() {
+        for side in [Side::Gt, Side::Tracker] {
+            let idx = by.side(side, i);
+            if idx.len() > MAX_BOXES_PER_FRAME {
+                let problem = Problem::TooManyBoxes {
+                    frame,
+                    count: idx.len(),
+                    max: MAX_BOXES_PER_FRAME,
+                };
+                return Err(input.error(side, idx[MAX_BOXES_PER_FRAME], problem));
+            }
+        }
+    }
     let (mask_w, mask_h) = mask_size.map(|(h, w)| (w, h)).unwrap_or((0, 0));
 
     // MOTS: masks of a frame must not overlap (gt objects and the merged ignore region count as

@@ -60,8 +60,8 @@ pub fn id_message(id: &str) -> String {
 
 /// Most per-frame slots a COCO-video writer lays out for one video: the format lists every
 /// track's boxes frame by frame (`null` where absent), so a track costs the video's length
-/// whatever it holds. 2²⁶ slots is a hundred tracks over 9 hours at 30 fps, about 400 MB of
-/// JSON even when empty.
+/// whatever it holds. 2²⁶ slots is 64 tracks over 2²⁰ frames (9.7 hours at 30 fps) or 13,000
+/// tracks over 5,000 frames, about 300 MB of JSON even when empty.
 pub const MAX_SLOTS: u64 = 1 << 26;
 
 /// Most vertices of one VOT polygon region. The exact overlap sweeps every edge at every
@@ -73,3 +73,9 @@ pub const MAX_POLYGON_VERTICES: usize = 1024;
 /// vertices can cross itself `n²/2` times, each crossing a sweep event over every edge;
 /// above this a polygon must be simple (a bow-tie of 4 vertices is still read).
 pub const MAX_SELF_CROSSING_VERTICES: usize = 64;
+
+/// Most boxes (records) of one side in one frame that `eval` and `refine` take, the tracker's
+/// own cap ([`MAX_DETECTIONS`](crate::track::MAX_DETECTIONS)): a frame's similarity matrix is
+/// ground truth × tracker boxes and its matching cubic in them, and no detector or annotation
+/// holds that many objects in one frame.
+pub const MAX_BOXES_PER_FRAME: usize = crate::track::MAX_DETECTIONS;
