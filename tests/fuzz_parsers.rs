@@ -1156,3 +1156,31 @@ fn writer_findings_hold() {
     );
     assert_eq!(Categories::default().name(i32::MIN), None);
 }
+
+/// The image bombs among the seeds are refused from their headers: an error, and no
+/// allocation near the size they claim.
+#[test]
+fn image_bombs_refused_before_decoding() {
+    let rgba = image::DynamicImage::ImageRgba8(image::RgbaImage::new(1, 1));
+    for bomb in [
+        png_claiming(20_000, 20_000, rgba.clone()),
+        png_claiming(65_536, 1, rgba),
+        jpeg_claiming(20_000, 20_000),
+    ] {
+        LARGEST.with(|l| l.set(0));
+        TRACKING.with(|on| on.set(true));
+        let e = decode_image(&bomb, None, "bomb", None).map(|_| ());
+        let m = decode_png_masks(&bomb, 1, "bomb.png", EightBit::Ids).map(|_| ());
+        TRACKING.with(|on| on.set(false));
+        let e = e.unwrap_err().to_string();
+        // The cap's message, or the PNG decoder's own refusal of a header whose data cannot
+        // fill it (png checks that before the size reaches the cap).
+        assert!(
+            e.contains("refused before decoding") || e.contains("not have enough data"),
+            "{e}"
+        );
+        assert!(m.is_err());
+        let largest = LARGEST.with(Cell::get);
+        assert!(largest < 1 << 20, "{largest} bytes allocated for {e}");
+    }
+}
