@@ -87,7 +87,17 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
             .filter(|&n| n > 0)
             .ok_or_else(|| format!("--size {s:?}: expected WxH with positive whole numbers"))
     };
-    Ok((p(w)?, p(h)?))
+    let (w, h) = (p(w)?, p(h)?);
+    // The size clips every region; one beyond the readers' image cap is no real video.
+    if !shapetrack::io::limits::image_size_ok(w.into(), h.into()) {
+        return Err(format!(
+            "--size {s:?}: beyond the image cap (sides up to {}, at most {} pixels; \
+             src/io/limits.rs)",
+            shapetrack::io::limits::MAX_SIDE,
+            shapetrack::io::limits::MAX_PIXELS
+        ));
+    }
+    Ok((w, h))
 }
 
 /// The first existing path among candidates.
@@ -271,5 +281,13 @@ mod tests {
         assert_eq!(parse_size("640x480"), Ok((640, 480)));
         assert!(parse_size("0x0").is_err());
         assert!(parse_size("640x").is_err());
+    }
+
+    /// A size beyond the readers' image cap is refused: it is a claim, not an image.
+    #[test]
+    fn size_beyond_the_image_cap_is_refused() {
+        let e = parse_size("100000x100000").unwrap_err();
+        assert!(e.contains("--size") && e.contains("cap"), "{e}");
+        assert!(parse_size("8192x8192").is_ok());
     }
 }
