@@ -25,9 +25,10 @@ use shapetrack::detect::{
     MovingCameraDetector, MovingConfig, RefineConfig,
 };
 use shapetrack::io::motchallenge::{parse_mot, write_mots};
-use shapetrack::io::{image_files, read_rgb, read_text, write_text, IoError, Record, Rle};
+use shapetrack::io::{image_files, read_rgb, read_text, AtomicFile, IoError, Record, Rle};
 use shapetrack::segment::{Job, Net, SegmentConfig, WholeFrame};
 use shapetrack::{Detection, Frame};
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Which detector runs.
@@ -395,7 +396,10 @@ pub fn run(args: Args) -> crate::CliResult {
             });
         }
     }
-    let mut out = Vec::new();
+    // Written frame by frame, like `track`: a long folder's masks are never all held. The
+    // file is atomic, so a failure midway still leaves any old output untouched.
+    let mut out = AtomicFile::create(&args.out)?;
+    let mut masks = 0usize;
     let mut first: Option<(u32, u32)> = None;
     for (i, path) in files.iter().enumerate() {
         let n = i as u32 + 1;
@@ -416,13 +420,18 @@ pub fn run(args: Args) -> crate::CliResult {
         let dets = runner
             .detect(n, &frame)
             .map_err(|source| DetectCliError::Detect { frame: n, source })?;
-        out.extend(records(n, &dets, w, h));
+        let recs = records(n, &dets, w, h);
+        masks += recs.len();
+        out.write_all(write_mots(&recs).as_bytes())
+            .map_err(|source| IoError::Io {
+                file: args.out.display().to_string(),
+                source,
+            })?;
     }
-    write_text(&args.out, &write_mots(&out))?;
+    out.commit()?;
     eprintln!(
-        "detect: {} frames, {} masks, detector {}",
+        "detect: {} frames, {masks} masks, detector {}",
         files.len(),
-        out.len(),
         runner.name()
     );
     Ok(())
