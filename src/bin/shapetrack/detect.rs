@@ -24,6 +24,7 @@ use shapetrack::detect::{
     BackgroundConfig, BackgroundSubtractor, BoxRefiner, CameraJudge, DetectError, Detector,
     MovingCameraDetector, MovingConfig, RefineConfig,
 };
+use shapetrack::io::limits::MAX_BOXES_PER_FRAME;
 use shapetrack::io::motchallenge::{parse_mot, write_mots};
 use shapetrack::io::{image_files, read_rgb, read_text, AtomicFile, IoError, Record, Rle};
 use shapetrack::segment::{Job, Net, SegmentConfig, WholeFrame};
@@ -333,13 +334,35 @@ impl Runner {
     }
 }
 
-/// Reads MOTChallenge boxes into per-frame detections (index = frame number).
+/// Reads MOTChallenge boxes into per-frame detections (index = frame number). A frame of more
+/// than [`MAX_BOXES_PER_FRAME`] boxes (the tracker's cap) is an error naming the first line
+/// over it: the refiner's work per frame would follow the file's claim.
 pub fn read_boxes(path: &Path, frames: usize) -> Result<Vec<Vec<Detection>>, IoError> {
     let file = path.display().to_string();
-    let records = parse_mot(&read_text(path)?, &file)?;
+    let text = read_text(path)?;
+    let records = parse_mot(&text, &file)?;
     let mut out = vec![Vec::new(); frames + 1];
     for r in records {
         if let Some(v) = out.get_mut(r.frame as usize) {
+            if v.len() == MAX_BOXES_PER_FRAME {
+                // The line of this frame's first box over the cap: records are one a line.
+                let frame = r.frame.to_string();
+                let line = text
+                    .lines()
+                    .enumerate()
+                    .filter(|(_, l)| l.split(',').next().map(str::trim) == Some(frame.as_str()))
+                    .nth(MAX_BOXES_PER_FRAME)
+                    .map_or(0, |(i, _)| i + 1);
+                return Err(IoError::Invalid {
+                    file,
+                    line,
+                    message: format!(
+                        "frame {} holds more than {MAX_BOXES_PER_FRAME} boxes, the most per \
+                         frame the tracker and the refiner take (src/io/limits.rs)",
+                        r.frame
+                    ),
+                });
+            }
             let mut d = Detection::from_box(r.bbox, r.score);
             d.class = r.class;
             v.push(d);
@@ -435,4 +458,37 @@ pub fn run(args: Args) -> crate::CliResult {
         runner.name()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::read_boxes;
+    use shapetrack::io::limits::MAX_BOXES_PER_FRAME;
+
+    /// `--boxes` takes at most the tracker's boxes per frame: the refiner's work per frame
+    /// follows the file's claim otherwise. The error names the file and the first line over.
+    #[test]
+    fn boxes_beyond_the_per_frame_cap_are_refused_with_their_line() {
+        let dir = std::env::temp_dir().join(format!("st-boxes-cap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("boxes.txt");
+        let mut text = String::from("1,-1,5,5,10,10,0.9,-1,-1,-1\n");
+        for k in 0..=MAX_BOXES_PER_FRAME {
+            text.push_str(&format!("2,-1,{k},5,10,10,0.9,-1,-1,-1\n"));
+        }
+        std::fs::write(&path, &text).unwrap();
+        let e = read_boxes(&path, 3).unwrap_err().to_string();
+        let line = MAX_BOXES_PER_FRAME + 2;
+        assert!(e.contains(&format!("boxes.txt:{line}:")), "{e}");
+        assert!(e.contains("frame 2"), "{e}");
+        // At the cap it is read.
+        let at_cap: String = text
+            .lines()
+            .take(line - 1)
+            .map(|l| format!("{l}\n"))
+            .collect();
+        std::fs::write(&path, at_cap).unwrap();
+        assert_eq!(read_boxes(&path, 3).unwrap()[2].len(), MAX_BOXES_PER_FRAME);
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
