@@ -60,21 +60,16 @@ export function bindControls(app) {
   const det = byId('detector', HTMLSelectElement);
   det.replaceChildren(...listDetectors().map((d) => new Option(d.label, d.name)));
   det.value = app.detector;
-  det.addEventListener('change', () => {
+  const applyDetector = () => {
     Promise.resolve()
       .then(() => app.changeDetector(det.value, det.selectedOptions[0]?.text ?? det.value))
       .catch((e) => app.fail(e));
-  });
+  };
+  det.addEventListener('change', applyDetector);
   app.showObjectFilter();
   // The object filter applies from the next frame while tracking (the detector is set again,
   // its model kept), else to the next source.
-  for (const id of ['det-classes', 'det-score']) {
-    byId(id, HTMLInputElement).addEventListener('change', () => {
-      Promise.resolve()
-        .then(() => app.changeDetector(det.value, det.selectedOptions[0]?.text ?? det.value))
-        .catch((e) => app.fail(e));
-    });
-  }
+  for (const id of ['det-classes', 'det-score']) byId(id, HTMLInputElement).addEventListener('change', applyDetector);
   const learned = byId('det-learned', HTMLInputElement);
   learned.addEventListener('change', () => {
     app.learnedPolicy = learned.checked ? 'keyframes' : 'off';

@@ -183,7 +183,8 @@ export function showDetectorInUse(app, src) {
   if (!auto) return;
   auto.dataset.label ??= auto.text;
   const used = src === undefined ? app.detector : detectorFor(app, src);
-  const name = [...menu.options].find((o) => o.value === used)?.dataset.label ?? [...menu.options].find((o) => o.value === used)?.text ?? used;
+  const option = [...menu.options].find((o) => o.value === used);
+  const name = option?.dataset.label ?? option?.text ?? used;
   auto.text = app.detector === 'auto' && used !== 'auto' ? `${auto.dataset.label} (the demo: ${name})` : auto.dataset.label;
 }
 
@@ -205,7 +206,8 @@ export async function changeDetector(app, name, label) {
   // Frames in flight finish with the old detector; the switch lands between two frames.
   const wasPlaying = app.playing;
   await app.stop();
-  const { classes } = await app.worker.setDetector(app.detectorFor(app.source), detectorOptions(app.detectorFor(app.source)));
+  const used = app.detectorFor(app.source);
+  const { classes } = await app.worker.setDetector(used, detectorOptions(used));
   app.detectorChoice = null;
   app.warming = false;
   if (classes.length) app.labels = classes.flatMap((n, i) => (n ? [{ class: i, name: n }] : []));
