@@ -74,8 +74,9 @@ pub const MAX_POLYGON_VERTICES: usize = 1024;
 /// above this a polygon must be simple (a bow-tie of 4 vertices is still read).
 pub const MAX_SELF_CROSSING_VERTICES: usize = 64;
 
-/// Most boxes (records) of one side in one frame that `eval` and `refine` take, the tracker's
-/// own cap ([`MAX_DETECTIONS`](crate::track::MAX_DETECTIONS)): a frame's similarity matrix is
-/// ground truth × tracker boxes and its matching cubic in them, and no detector or annotation
-/// holds that many objects in one frame.
-pub const MAX_BOXES_PER_FRAME: usize = crate::track::MAX_DETECTIONS;
+/// Most boxes (records) of one side in one frame that `eval` and `refine` take, and the
+/// tracker's own cap (`track::MAX_DETECTIONS` is this constant): a frame's similarity matrix
+/// is ground truth × tracker boxes and its matching cubic in them, and no detector (YOLO's
+/// `max_det` is 300) or annotation (a MOT20 frame holds ~250 people) holds that many objects in
+/// one frame.
+pub const MAX_BOXES_PER_FRAME: usize = 2_000;

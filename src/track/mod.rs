@@ -81,8 +81,9 @@ use thiserror::Error;
 /// everything overlaps (10,000 stacked boxes took 11 GB before pairs were capped per track,
 /// see [`regions::MAX_CANDIDATES`]); no detector emits that many objects per frame (YOLO's
 /// `max_det` is 300, a MOT20 frame holds ~250 people), and a frame beyond this cap is an
-/// error, not a stall.
-pub const MAX_DETECTIONS: usize = 2_000;
+/// error, not a stall. The same cap as the readers' ([`crate::io::limits::MAX_BOXES_PER_FRAME`],
+/// defined there because the readers sit below the tracker).
+pub const MAX_DETECTIONS: usize = crate::io::limits::MAX_BOXES_PER_FRAME;
 
 /// Errors raised by the tracker.
 #[derive(Debug, Error, Clone, PartialEq)]
