@@ -2,6 +2,7 @@
 //! `--out` or `--json` must not destroy the detections, the ground truth or a frame; every
 //! command that writes checks its outputs against the files it reads before any work, with
 //! the same comparison (the same file under any name: relative, absolute, through a link).
+//! Also the peak memory a command's summary line reports, which says whether it streamed.
 
 use std::path::{Path, PathBuf};
 
@@ -58,6 +59,14 @@ where
         }
     }
     Ok(())
+}
+
+/// The process's peak resident memory (Linux `VmHWM`), for a command's summary line: a long
+/// video must not make it grow (`track`'s online output and `vot`'s frames stream).
+pub fn peak_memory_kb() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 #[cfg(test)]

@@ -541,7 +541,7 @@ pub fn run(args: Args) -> crate::CliResult {
         }
     }
 
-    if let Some(kb) = peak_memory_kb() {
+    if let Some(kb) = crate::outputs::peak_memory_kb() {
         summary.push_str(&format!(" peak_mem_kb={kb}"));
     }
     let secs = core.as_secs_f64();
@@ -563,14 +563,6 @@ pub fn run(args: Args) -> crate::CliResult {
         fps
     );
     Ok(())
-}
-
-/// The process's peak resident memory (Linux `VmHWM`), for the summary line: a long video
-/// must not make it grow (online MOT/MOTS output streams).
-fn peak_memory_kb() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 #[cfg(test)]
