@@ -12,6 +12,7 @@
 // - the same, the box tool picked `--warm-ms` (default 6000) before the box is given: the app
 //   loads the net and runs it once on zeros meanwhile;
 // - later boxes (the net loaded: one inference), median of `--runs`;
+// - one inference at 320×320 and at 256×256 alternating (a given box's crop runs at 256);
 // - the weights-free refinement of the same box, for comparison.
 //
 //   npm run build && node scripts/bench-learned-box.mjs [--runs N] [--warm-ms MS] [--port P]
@@ -131,6 +132,31 @@ try {
   console.log(
     `later boxes (net loaded): ${f0(median(later.map((r) => r.page)))} ms in the page (median of ${RUNS}; min ${f0(Math.min(...later.map((r) => r.page)))}, max ${f0(Math.max(...later.map((r) => r.page)))}), ${f0(median(later.map((r) => r.ms)))} ms in the worker`,
   );
+  // The side's share, paired in this run: one net (a segmenter of its own, two threads as the
+  // app's while keyframes are off), inferences at 320 (the whole frame's) and at 256 (a given
+  // box's, what the boxes above ran at) alternating.
+  const sides = await page.evaluate(async (runs) => {
+    const seg = await /** @type {any} */ (window).__shapetrack.segmenter({ threads: 2 });
+    try {
+      await seg.start();
+      /** @type {Record<number, number[]>} */
+      const ms = { 320: [], 256: [] };
+      for (let k = 0; k <= runs; k++) {
+        for (const side of [320, 256]) {
+          const input = new Float32Array(3 * side * side).map((_, i) => Math.sin(i / 97));
+          const t0 = performance.now();
+          await seg.run(input, { transfer: true });
+          // The first of each side makes its session: left out.
+          if (k > 0) ms[side].push(performance.now() - t0);
+        }
+      }
+      return ms;
+    } finally {
+      seg.dispose();
+    }
+  }, RUNS);
+  const [m320, m256] = [median(sides[320]), median(sides[256])];
+  console.log(`one inference, alternating (median of ${RUNS}): 320×320 ${f0(m320)} ms, 256×256 ${f0(m256)} ms (×${(m256 / m320).toFixed(2)})`);
   const free = [];
   for (let k = 0; k < RUNS; k++) free.push(await boxOnce(page, false));
   console.log(`weights-free: ${f0(median(free.map((r) => r.page)))} ms in the page (median of ${RUNS})`);

@@ -40,7 +40,7 @@ use serde::{Deserialize, Serialize};
 use crate::features::sift::{self, MatchConfig, SiftFeatures};
 use crate::features::transform::{ransac, RansacConfig, Transform, TransformKind, Translation};
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
-use crate::segment::{input_tensor, Crop, Net, Saliency, INPUT_LEN};
+use crate::segment::{input_tensor, Crop, Net, Saliency};
 use colour::{ColourModel, RefineParams, Ring};
 
 /// The follower's result for one frame.
@@ -195,7 +195,7 @@ impl Follower {
     ) -> Result<FollowStep, FollowError> {
         let sal = match self.learned_crop() {
             Some(crop) if (frame.width(), frame.height()) == (self.width, self.height) => {
-                let mut input = vec![0f32; INPUT_LEN];
+                let mut input = vec![0f32; crate::segment::input_len(self.cfg.segment.side)];
                 input_tensor(frame, &crop, &mut input)?;
                 let out = net.run(&input)?;
                 Some(Saliency::new(crop, &out, self.cfg.segment.stretch)?)

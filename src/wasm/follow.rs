@@ -79,7 +79,8 @@ impl Follower {
         let Some(crop) = self.inner.learned_crop() else {
             return Ok(None);
         };
-        let mut out = vec![0f32; crate::segment::INPUT_LEN];
+        let side = self.inner.config().segment.side;
+        let mut out = vec![0f32; crate::segment::input_len(side)];
         crate::segment::input_tensor(&frame, &crop, &mut out).map_err(js_error)?;
         self.crop = Some(crop);
         Ok(Some(out))
@@ -99,8 +100,16 @@ impl Follower {
                 "stepLearned needs the output for this frame's learnedInput".into(),
             ))
         })?;
-        let stretch = self.inner.config().segment.stretch;
-        let sal = crate::segment::Saliency::new(crop, output, stretch).map_err(js_error)?;
+        let segment = &self.inner.config().segment;
+        let expected = crate::segment::output_len(segment.side);
+        if output.len() != expected {
+            return Err(js_error(crate::segment::SegmentError::TensorLength {
+                what: "the network's output",
+                len: output.len(),
+                expected,
+            }));
+        }
+        let sal = crate::segment::Saliency::new(crop, output, segment.stretch).map_err(js_error)?;
         let dets = detections.map(|d| d.inner).unwrap_or_default();
         let frame = buf.frame()?;
         let s = self

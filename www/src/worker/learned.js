@@ -12,7 +12,7 @@
 //   where a frame gets ~50 ms). See the class.
 
 import { SegmenterClient } from './segmenter/client.js';
-import { INPUT_LENGTH, SegmenterError } from './segmenter/contract.js';
+import { BOX_SIDE, SegmenterError, inputLength } from './segmenter/contract.js';
 
 /**
  * @typedef {import('../lib/core.js').Core} Core
@@ -82,7 +82,7 @@ export function warmLearned({ run = true } = {}) {
   if (seg.info) return;
   seg
     .start()
-    .then(() => (run ? seg.run(new Float32Array(INPUT_LENGTH), { transfer: true }) : undefined))
+    .then(() => (run ? seg.run(new Float32Array(inputLength(BOX_SIDE)), { transfer: true }) : undefined))
     .catch(() => {
       if (client === seg && !seg.info) forgetSegmenter();
     });
@@ -161,7 +161,7 @@ export async function boxMask(core, buf, box, { learned, onProgress }) {
     /** @type {import('../../pkg/shapetrack.js').SegmentJob | null} */
     let job = null;
     try {
-      job = new core.SegmentJob(buf, dets, 'off');
+      job = new core.SegmentJob(buf, dets, 'off', { side: BOX_SIDE });
       await runJob(job, buf, onProgress);
       const done = job.finish();
       try {

@@ -14,10 +14,10 @@
 //   const seg = new SegmenterClient();
 //   seg.onProgress = ({ loaded, total }) => …;          // bytes of the model + runtime
 //   const { backend, threads } = await seg.start();     // fetched, checked, session started
-//   const probs = await seg.run(input);                 // Float32Array 3·320·320 → 320·320
+//   const probs = await seg.run(input);                 // Float32Array 3·s·s → s·s (s = 320 or 256)
 //   seg.dispose();
 
-import { INPUT_LENGTH, SegmenterError } from './contract.js';
+import { SegmenterError, sideOfInput } from './contract.js';
 
 /**
  * @typedef {import('./net.js').LoadProgress} LoadProgress
@@ -98,8 +98,8 @@ export class SegmenterClient {
   }
 
   /**
-   * Runs the net on one input: 3·320·320 floats (CHW, RGB, normalised), resolves with 320·320
-   * probabilities. The input is copied into a buffer that is transferred (a view on wasm
+   * Runs the net on one input: 3·side·side floats (CHW, RGB, normalised; `sideOfInput`),
+   * resolves with side·side probabilities. The input is copied into a buffer that is transferred (a view on wasm
    * memory cannot be), unless `transfer`: then `input`'s own buffer is transferred and
    * detached here, which needs `input` to span its whole buffer.
    * @param {Float32Array} input
@@ -107,8 +107,8 @@ export class SegmenterClient {
    * @returns {Promise<Float32Array>}
    */
   async run(input, { transfer = false } = {}) {
-    if (!(input instanceof Float32Array) || input.length !== INPUT_LENGTH) {
-      throw new SegmenterError('input', `segmenter: run() takes a Float32Array of ${INPUT_LENGTH}, not ${input instanceof Float32Array ? `one of ${input.length}` : typeof input}`);
+    if (!(input instanceof Float32Array) || sideOfInput(input.length) === null) {
+      throw new SegmenterError('input', `segmenter: run() takes a Float32Array of 3·side·side (side a multiple of 32 from 128 to 320), not ${input instanceof Float32Array ? `one of ${input.length}` : typeof input}`);
     }
     if (transfer && (input.byteOffset !== 0 || input.byteLength !== input.buffer.byteLength)) {
       throw new SegmenterError('input', 'segmenter: run(input, { transfer: true }) needs an input that spans its whole buffer');

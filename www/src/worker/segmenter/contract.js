@@ -1,5 +1,6 @@
 // What the segmenter's callers and its worker share, without the net's loading code: the
-// input and output sizes of the model (U²-Net-p at 320×320) and the typed error.
+// input and output sizes of the model (U²-Net-p, 320×320 as its file declares it, smaller for a
+// crop around a given box) and the typed error.
 
 /**
  * @typedef {'fetch' | 'integrity' | 'insecure' | 'runtime' | 'model' | 'input' | 'run' | 'disposed' | 'worker' | 'protocol'} SegmenterErrorCode
@@ -12,12 +13,34 @@
  *   the worker does not know
  */
 
-/** Side of the model's square input and output. */
+/** Side of the model's square input and output as its file declares it: the whole frame's. */
 export const SIDE = 320;
-/** Floats run() takes: 3 channels (RGB, CHW order) of SIDE·SIDE. */
+/**
+ * Side a crop around a given box (a box a person drew) runs at: half the arithmetic of 320 for
+ * the same J from boxes (the core's `segment::BOX_SIDE`, where the measurement is named).
+ */
+export const BOX_SIDE = 256;
+/** Floats run() takes at SIDE: 3 channels (RGB, CHW order) of SIDE·SIDE. */
 export const INPUT_LENGTH = 3 * SIDE * SIDE;
-/** Floats run() returns: one probability per pixel of the SIDE·SIDE input. */
+/** Floats run() returns at SIDE: one probability per pixel of the SIDE·SIDE input. */
 export const OUTPUT_LENGTH = SIDE * SIDE;
+
+/**
+ * Floats of an input at `side`.
+ * @param {number} side
+ */
+export const inputLength = (side) => 3 * side * side;
+
+/**
+ * The side of an input of `length` floats (3·side·side, side a multiple of 32 from 128 to
+ * SIDE, the sides the core runs the net at), or null.
+ * @param {number} length
+ * @returns {number | null}
+ */
+export function sideOfInput(length) {
+  const side = Math.round(Math.sqrt(length / 3));
+  return 3 * side * side === length && side >= 128 && side <= SIDE && side % 32 === 0 ? side : null;
+}
 
 /** An error of the segmenter, with a code a caller can act on (see SegmenterErrorCode). */
 export class SegmenterError extends Error {

