@@ -79,6 +79,12 @@ pub fn side_ok(side: u32) -> bool {
     (MIN_SIDE..=SIDE as u32).contains(&side) && side % 32 == 0
 }
 
+/// The side of an input tensor of `len` values (`3 · side²`), if it is one the network runs
+/// at: what a [`Net`] reads its input's shape from.
+pub fn side_of_input(len: usize) -> Option<u32> {
+    side_of(len, 3)
+}
+
 /// The side whose `channels · side²` values `len` is, if it is one the network runs at.
 fn side_of(len: usize, channels: usize) -> Option<u32> {
     let area = len / channels;

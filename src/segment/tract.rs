@@ -7,7 +7,7 @@
 //! kernels there). tract is slower per run (measured in `tests/data/detect/README.md`), which
 //! the CLI's policy of running the network only where it decides something absorbs.
 
-use super::{model, side_ok, Net, SegmentError, INPUT_LEN, SIDE};
+use super::{model, side_of_input, Net, SegmentError, INPUT_LEN, SIDE};
 use std::path::Path;
 use tract_onnx::prelude::*;
 
@@ -88,14 +88,11 @@ impl TractNet {
 
 impl Net for TractNet {
     fn run(&mut self, input: &[f32]) -> Result<Vec<f32>, SegmentError> {
-        let side = ((input.len() / 3) as f64).sqrt().round() as usize;
-        if 3 * side * side != input.len() || !side_ok(side as u32) {
-            return Err(SegmentError::TensorLength {
-                what: "the input tensor",
-                len: input.len(),
-                expected: INPUT_LEN,
-            });
-        }
+        let side = side_of_input(input.len()).ok_or(SegmentError::TensorLength {
+            what: "the input tensor",
+            len: input.len(),
+            expected: INPUT_LEN,
+        })? as usize;
         let t = Tensor::from_shape(&[1, 3, side, side], input)
             .map_err(|e| SegmentError::Run(e.to_string()))?;
         let out = self

@@ -10,7 +10,7 @@
 //! arithmetic at about four times tract's speed, for long evaluation grids. The crops, the
 //! thresholds and everything after the network are the CLI's own either way.
 
-use shapetrack::segment::{Net, SegmentError};
+use shapetrack::segment::{side_of_input, Net, SegmentError, INPUT_LEN};
 use std::collections::hash_map::DefaultHasher;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -128,7 +128,11 @@ impl Net for PipeNet {
         use std::io::{Read, Write};
         let fail = |e: std::io::Error| SegmentError::Model(format!("SHAPETRACK_EVAL_NET: {e}"));
         // The side first: a crop around a box and the whole frame run at different sides.
-        let side = ((input.len() / 3) as f64).sqrt().round() as u32;
+        let side = side_of_input(input.len()).ok_or(SegmentError::TensorLength {
+            what: "the input tensor",
+            len: input.len(),
+            expected: INPUT_LEN,
+        })?;
         let bytes: Vec<u8> = side
             .to_le_bytes()
             .into_iter()

@@ -86,24 +86,13 @@ export function atSide(model, side) {
   }
   const out = model.slice();
   if (side === MODEL_SIDE) return out;
-  // ModelProto.graph = 7; GraphProto.input = 11, .output = 12; ValueInfoProto.type = 2;
-  // TypeProto.tensor_type = 1; TypeProto.Tensor.shape = 2; TensorShapeProto.dim = 1;
-  // Dimension.dim_value = 1 (onnx.proto3).
-  const graph = child(out, 0, out.length, 7);
-  if (!graph) throw new SegmenterError('model', 'segmenter: the model file has no graph');
   let inputs = 0;
   let outputs = 0;
-  for (const v of fields(out, graph.start, graph.end)) {
-    if ((v.field !== 11 && v.field !== 12) || v.wire !== 2) continue;
-    const type = child(out, v.start, v.end, 2);
-    const tensor = type && child(out, type.start, type.end, 1);
-    const shape = tensor && child(out, tensor.start, tensor.end, 2);
-    const dims = shape ? [...fields(out, shape.start, shape.end)].filter((f) => f.field === 1 && f.wire === 2) : [];
+  for (const { input, dims } of declared(out)) {
     if (dims.length !== 4) throw new SegmenterError('model', `segmenter: a model input or output has ${dims.length} dimensions, expected 4`);
     let fixed = 0;
-    for (const d of dims.slice(2)) {
-      // A symbolic dimension (the side outputs': `dim_param`) follows the input by itself.
-      const value = [...fields(out, d.start, d.end)].find((f) => f.field === 1 && f.wire === 0);
+    // A symbolic dimension (the side outputs': `dim_param`, null here) follows the input.
+    for (const value of dims.slice(2)) {
       if (!value) continue;
       if (varint(out, value.start)[0] !== MODEL_SIDE || value.end - value.start !== 2) {
         throw new SegmenterError('model', `segmenter: a model input or output is not ${MODEL_SIDE} pixels wide and high`);
@@ -112,7 +101,7 @@ export function atSide(model, side) {
       out[value.start + 1] = side >> 7;
       fixed++;
     }
-    if (v.field === 11) inputs += fixed === 2 ? 1 : 2;
+    if (input) inputs += fixed === 2 ? 1 : 2;
     else if (fixed === 2) outputs++;
   }
   // The one input, and at least the first (used) output, were declared at the model's side.
@@ -127,21 +116,32 @@ export function atSide(model, side) {
  * @returns {{ inputs: (number | null)[][], outputs: (number | null)[][] }}
  */
 export function declaredShapes(model) {
-  const graph = child(model, 0, model.length, 7);
-  if (!graph) throw new SegmenterError('model', 'segmenter: the model file has no graph');
   /** @type {{ inputs: (number | null)[][], outputs: (number | null)[][] }} */
   const shapes = { inputs: [], outputs: [] };
+  for (const { input, dims } of declared(model)) {
+    (input ? shapes.inputs : shapes.outputs).push(dims.map((d) => (d ? varint(model, d.start)[0] : null)));
+  }
+  return shapes;
+}
+
+/**
+ * The graph's declared inputs and outputs, in order: for each, whether it is an input, and
+ * where each dimension's fixed value lies (its varint; null for a symbolic dimension).
+ * ModelProto.graph = 7; GraphProto.input = 11, .output = 12; ValueInfoProto.type = 2;
+ * TypeProto.tensor_type = 1; TypeProto.Tensor.shape = 2; TensorShapeProto.dim = 1;
+ * Dimension.dim_value = 1 (onnx.proto3).
+ * @param {Uint8Array} model
+ * @returns {Generator<{ input: boolean, dims: ({ start: number, end: number } | null)[] }>}
+ */
+function* declared(model) {
+  const graph = child(model, 0, model.length, 7);
+  if (!graph) throw new SegmenterError('model', 'segmenter: the model file has no graph');
   for (const v of fields(model, graph.start, graph.end)) {
     if ((v.field !== 11 && v.field !== 12) || v.wire !== 2) continue;
     const type = child(model, v.start, v.end, 2);
     const tensor = type && child(model, type.start, type.end, 1);
     const shape = tensor && child(model, tensor.start, tensor.end, 2);
     const dims = shape ? [...fields(model, shape.start, shape.end)].filter((f) => f.field === 1 && f.wire === 2) : [];
-    const values = dims.map((d) => {
-      const value = [...fields(model, d.start, d.end)].find((f) => f.field === 1 && f.wire === 0);
-      return value ? varint(model, value.start)[0] : null;
-    });
-    (v.field === 11 ? shapes.inputs : shapes.outputs).push(values);
+    yield { input: v.field === 11, dims: dims.map((d) => [...fields(model, d.start, d.end)].find((f) => f.field === 1 && f.wire === 0) ?? null) };
   }
-  return shapes;
 }
