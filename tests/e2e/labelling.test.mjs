@@ -479,6 +479,18 @@ test('fields and shortcuts: Esc in the new-id field keeps the selection; a short
   assert.deepEqual((await state()).selection, { a: first, b: null }, 'and keeps the selection');
   assert.deepEqual((await state()).ids.includes(first), true, 'nothing renumbered');
 
+  // Enter renumbers and gives the keyboard back at once: checked in the same task as the
+  // submit, before any rendering pass could move focus off the hidden field (a shortcut typed
+  // right after Enter went into the hidden field and was lost; the CI failure of stop 71).
+  await page.keyboard.press('n');
+  await page.fill('#renumber-input', '902');
+  const focusAfter = await page.evaluate(() => {
+    /** @type {HTMLFormElement} */ (document.getElementById('renumber-form')).requestSubmit();
+    return document.activeElement?.id ?? '';
+  });
+  assert.notEqual(focusAfter, 'renumber-input', 'focus left the hidden new-id field');
+  assert.ok((await state()).ids.includes(902));
+
   // A shortcut typed in the follow's Frames box (a number field has no use for letters) acts,
   // instead of vanishing: K hides the masks; the box keeps its value.
   assert.equal(await page.isChecked('#opt-masks'), true);

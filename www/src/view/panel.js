@@ -55,7 +55,7 @@ export class Panel {
     this.renumberForm.addEventListener('submit', (e) => {
       e.preventDefault();
       const v = Number(this.renumberInput.value);
-      this.renumberForm.hidden = true;
+      this.cancelRenumber();
       handlers.onRenumber(v);
     });
     this.list.addEventListener('click', (e) => {
@@ -72,9 +72,15 @@ export class Panel {
     chip.style.background = this.colour(id).css;
   }
 
-  /** Hides the inline "new id" field (Escape, or the selection went away). */
+  /**
+   * Hides the inline "new id" field (Enter, Escape, or the selection went away) and gives the
+   * keyboard back to the page. A hidden field keeps focus until the browser's next rendering
+   * pass; a shortcut typed before then (Enter, then D at once, or on a busy machine) would land
+   * in the field and be dropped.
+   */
   cancelRenumber() {
     this.renumberForm.hidden = true;
+    if (document.activeElement === this.renumberInput) this.renumberInput.blur();
   }
 
   /** Shows the inline "new id" field. @param {number} suggestion */
