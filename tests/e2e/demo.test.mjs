@@ -88,6 +88,28 @@ function motLines(records) {
 
 test('the demo tracks 1280×720 and the page keeps the tracker’s identities', async () => {
   await page.goto(`${app.server.url}?speed=max`);
+  // The Tracks card's count follows the table at every redraw, as the timeline's rows do
+  // (it used to wait for the list's rebuild, a few times a second, and lag behind births).
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  await page.evaluate(() => {
+    const w = /** @type {any} */ (window);
+    const a = w.__shapetrack.app;
+    // renderNow draws every view (render() asks for it at the next display frame).
+    const render = a.renderNow.bind(a);
+    w.__countChecks = { renders: 0, stale: 0, example: '' };
+    a.renderNow = () => {
+      const out = render();
+      const c = w.__countChecks;
+      const shown = document.getElementById('track-count')?.textContent;
+      const held = String(a.model.table.ids().length);
+      c.renders++;
+      if (shown !== held) {
+        c.stale++;
+        c.example ||= `frame ${a.cur}: shown ${shown}, table ${held}`;
+      }
+      return out;
+    };
+  });
   const s0 = await until((s) => s.processed >= 30);
   assert.deepEqual(s0.size, [1280, 720]);
   assert.equal(s0.source.kind, 'synth');
@@ -98,6 +120,9 @@ test('the demo tracks 1280×720 and the page keeps the tracker’s identities', 
 
   const done = await until((s) => !s.playing && s.processed === s.frames);
   assert.equal(done.frames, 600);
+  const counts = await page.evaluate(() => /** @type {any} */ (window).__countChecks);
+  assert.ok(counts.renders >= 100, `${counts.renders} redraws watched`);
+  assert.equal(counts.stale, 0, `the Tracks count behind the table in ${counts.stale} of ${counts.renders} redraws (${counts.example})`);
   const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
   const gt = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.groundTruth());
   assert.ok(gt.length > 1000, 'the scene’s ground truth reached the page');

@@ -86,6 +86,11 @@ export class TrackTable {
     return this.byId.has(id);
   }
 
+  /** How many tracks the table holds (what `ids().length` says, without listing them). */
+  get trackCount() {
+    return this.byId.size;
+  }
+
   /** @returns {number[]} every id, ascending */
   ids() {
     return [...this.byId.keys()].sort((a, b) => a - b);

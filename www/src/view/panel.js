@@ -129,6 +129,10 @@ export class Panel {
     this.buttons.undo.disabled = !canUndo;
     this.buttons.redo.disabled = !canRedo;
     this.lastEdit.textContent = lastEdit;
+    // The count is one number: it follows every frame, like the timeline's rows, while the
+    // list's rows are rebuilt a few times a second during tracking.
+    const count = String(table.trackCount);
+    if (this.count.textContent !== count) this.count.textContent = count;
     const now = performance.now();
     if (!busy || now - this.listAt > 400) this.renderList(table, selection);
   }
@@ -163,7 +167,6 @@ export class Panel {
     this.listIds = table.ids();
     this.listTable = table;
     this.listSel = { ...selection };
-    this.count.textContent = String(this.listIds.length);
     if (newSel && selection.a !== null) {
       // A track selected elsewhere (stage, timeline) is scrolled into view once.
       const i = this.listIds.indexOf(selection.a);
