@@ -537,6 +537,59 @@ test('the object filter: only the classes asked for are tracked, and an unknown 
   await page.close();
 });
 
+test('Min frames: no track shorter than asked, and the tracks kept are whole', async () => {
+  const page = await app.browser.context.newPage();
+  const errors = watchErrors(page);
+  await page.goto(`${app.server.url}?demo=0&speed=max`);
+  await page.waitForFunction(() => !!(/** @type {any} */ (window).__shapetrack));
+  await page.selectOption('#detector', 'ssd-moving');
+  await page.fill('#det-score', '0.3');
+  await page.press('#det-score', 'Tab');
+  const files = frames();
+  /** One run over the clip: frames per track id. @param {string} minFrames */
+  const run = async (minFrames) => {
+    await page.fill('#det-frames', minFrames);
+    await page.press('#det-frames', 'Tab');
+    await page.evaluate(() => {
+      /** @type {any} */ (window).__before = /** @type {any} */ (window).__shapetrack.app.source;
+    });
+    await page.setInputFiles('#file-images', files);
+    await page.waitForFunction(
+      () => {
+        const w = /** @type {any} */ (window);
+        return w.__shapetrack.app.source !== w.__before && w.__shapetrack.state().processed >= 1;
+      },
+      undefined,
+      { timeout: 120_000 },
+    );
+    // (Tab left the focus on the next control, a checkbox Space would toggle.)
+    await page.evaluate(() => /** @type {HTMLElement | null} */ (document.activeElement)?.blur());
+    await page.keyboard.press('Space');
+    await page.waitForFunction((n) => /** @type {any} */ (window).__shapetrack.state().processed === n, files.length, { timeout: 180_000 });
+    /** @type {Array<{ id: number, frame: number }>} */
+    const records = await page.evaluate(() => /** @type {any} */ (window).__shapetrack.records());
+    /** @type {Map<number, number>} */
+    const per = new Map();
+    for (const r of records) per.set(r.id, (per.get(r.id) ?? 0) + 1);
+    return per;
+  };
+  const all = await run('');
+  const kept = await run('12');
+  const short = (/** @type {Map<number, number>} */ m) => [...m.values()].filter((n) => n < 12).length;
+  console.log(`SSD on car-shadow (${files.length} frames), min score 0.3: tracks ${all.size} (${short(all)} shorter than 12 frames); Min frames 12: ${kept.size} (${short(kept)})`);
+  assert.ok(short(all) > 0, 'the clip has short tracks to drop (else this test shows nothing)');
+  assert.equal(short(kept), 0, `no track shorter than 12 frames: ${[...kept.values()]}`);
+  assert.ok(kept.size > 0, 'the car is still tracked');
+  // Its frames before confirmation are reported too: the longest track loses nothing.
+  assert.equal(Math.max(...kept.values()), Math.max(...all.values()), 'the longest track is whole');
+  // A number the field cannot take is refused, naming it.
+  await page.fill('#det-frames', '2.5');
+  await page.press('#det-frames', 'Tab');
+  await page.waitForFunction(() => /Min frames must be a whole number/.test(document.getElementById('status')?.textContent ?? ''), undefined, { timeout: 60_000 });
+  assert.deepEqual(errors.filter((e) => !/Min frames/.test(e)), []);
+  await page.close();
+});
+
 test('no request left localhost', () => {
   assert.deepEqual(app.browser.foreign, []);
 });

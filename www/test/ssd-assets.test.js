@@ -171,3 +171,13 @@ test('the SSD class filter: names in any case, none means all, an unknown name i
   assert.deepEqual([...(keptClasses(labels, ['person', ' CAR ']) ?? [])].sort(), [1, 2]);
   assert.throws(() => keptClasses(labels, ['unicorn']), /no class "unicorn"/);
 });
+
+test('withMinFrames sets the tracker\'s confirmation count at any frame rate, and refuses what it cannot take', async () => {
+  const { withMinFrames, SSD_TRACKER, MAX_MIN_FRAMES } = await import('../src/worker/detectors/ssd.js');
+  assert.equal(withMinFrames(SSD_TRACKER, undefined), SSD_TRACKER, 'unset: the detector\'s own settings');
+  assert.deepEqual(withMinFrames(SSD_TRACKER, 12), { ...SSD_TRACKER, min_hits: 12, min_hits_floor: 12 });
+  assert.deepEqual(withMinFrames({ preset: 'masks' }, 1), { preset: 'masks', min_hits: 1, min_hits_floor: 1 });
+  for (const bad of [0, -3, 2.5, Number.NaN, MAX_MIN_FRAMES + 1]) {
+    assert.throws(() => withMinFrames(SSD_TRACKER, bad), /minFrames must be a whole number from 1 to 1000/, String(bad));
+  }
+});

@@ -68,8 +68,9 @@ export function bindControls(app) {
   det.addEventListener('change', applyDetector);
   app.showObjectFilter();
   // The object filter applies from the next frame while tracking (the detector is set again,
-  // its model kept), else to the next source.
-  for (const id of ['det-classes', 'det-score']) byId(id, HTMLInputElement).addEventListener('change', applyDetector);
+  // its model kept), else to the next source; its shortest track is the tracker's setting,
+  // which a running tracker keeps (changeDetector says so).
+  for (const id of ['det-classes', 'det-score', 'det-frames']) byId(id, HTMLInputElement).addEventListener('change', applyDetector);
   const learned = byId('det-learned', HTMLInputElement);
   learned.addEventListener('change', () => {
     app.learnedPolicy = learned.checked ? 'keyframes' : 'off';

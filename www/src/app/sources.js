@@ -131,7 +131,8 @@ export function detectorFor(app, src) {
 const OBJECT_DETECTORS = new Set(['ssd', 'ssd-moving', 'moving-ssd']);
 
 /**
- * The options of detector `name` from the page's object filter (classes kept, lowest score):
+ * The options of detector `name` from the page's object filter (classes kept, lowest score,
+ * shortest track):
  * undefined when it sets nothing or the detector has no classes. A score outside [0, 1] is
  * refused here, naming the field.
  * @param {string} name
@@ -146,7 +147,16 @@ export function detectorOptions(name) {
   const text = byId('det-score', HTMLInputElement).value.trim();
   const minScore = text === '' ? undefined : Number(text);
   if (minScore !== undefined && !(minScore >= 0 && minScore <= 1)) throw new Error(`Min score must be between 0 and 1, not ${text}`);
-  const ssd = { ...(classes.length ? { classes } : {}), ...(minScore !== undefined ? { minScore } : {}) };
+  const framesText = byId('det-frames', HTMLInputElement).value.trim();
+  const minFrames = framesText === '' ? undefined : Number(framesText);
+  if (minFrames !== undefined && !(Number.isInteger(minFrames) && minFrames >= 1 && minFrames <= 1000)) {
+    throw new Error(`Min frames must be a whole number from 1 to 1000, not ${framesText}`);
+  }
+  const ssd = {
+    ...(classes.length ? { classes } : {}),
+    ...(minScore !== undefined ? { minScore } : {}),
+    ...(minFrames !== undefined ? { minFrames } : {}),
+  };
   if (!Object.keys(ssd).length) return undefined;
   return name === 'moving-ssd' ? { ssd } : ssd;
 }
@@ -212,7 +222,9 @@ export async function changeDetector(app, name, label) {
   app.warming = false;
   if (classes.length) app.labels = classes.flatMap((n, i) => (n ? [{ class: i, name: n }] : []));
   offerClasses(classes);
-  app.status(`detector: ${label} from frame ${app.session.processed + 1}`);
+  // The shortest track is the tracker's setting: a tracker that has reported keeps its own.
+  const frames = OBJECT_DETECTORS.has(used) && byId('det-frames', HTMLInputElement).value.trim() !== '' && app.session.processed > 0;
+  app.status(`detector: ${label} from frame ${app.session.processed + 1}${frames ? ' (Min frames: from the next video)' : ''}`);
   if (wasPlaying) app.play();
 }
 

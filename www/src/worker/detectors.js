@@ -6,7 +6,7 @@
 // turns into a `Detections` handle with one call. Register another detector with
 // `registerDetector(name, factory)`; the page picks it by name.
 
-import { ssdDetector } from './detectors/ssd.js';
+import { ssdDetector, withMinFrames } from './detectors/ssd.js';
 
 /**
  * @typedef {import('../lib/core.js').Core} Core
@@ -291,12 +291,13 @@ function movingWithSsd(options) {
   const moving = movingCamera(/** @type {Record<string, unknown>} */ (options.moving ?? {}));
   const ssd = ssdDetector({ minScore: 0.5, .../** @type {import('./detectors/ssd.js').SsdOptions} */ (options.ssd ?? {}), movingCamera: true });
   const covered = /** @type {number} */ (options.covered ?? COVERED);
+  const tracker = withMinFrames(MOVING_TRACKER, /** @type {{ minFrames?: number }} */ (options.ssd ?? {}).minFrames);
   /** @type {Core | null} */
   let wasm = null;
   /** @type {Detector & { classes: string[] }} */
   const detector = {
     name: 'moving-ssd',
-    tracker: MOVING_TRACKER,
+    tracker,
     classes: [],
     async init(ctx) {
       wasm = ctx.core;

@@ -34,13 +34,15 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   refine?: boolean | import('../../../pkg/shapetrack.js').RefineSettings,
  *   maxRefined?: number,
  *   classes?: string[],
+ *   minFrames?: number,
  * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
  *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the
  *   background subtractor's mask is not used (default 0.2); `perClassNms`: suppress overlaps
  *   only within a class; `refine`: refine boxes into masks (default true; an object gives
  *   `RefineConfig` settings, `false` keeps filled boxes); `maxRefined`: most boxes refined per
  *   frame (default MAX_REFINED); `classes`: the class names kept (any case; absent or empty:
- *   all), a name the model does not know is an error at init
+ *   all), a name the model does not know is an error at init; `minFrames`: shortest track
+ *   kept (see `withMinFrames`)
  */
 
 /**
@@ -60,6 +62,29 @@ const INPUT = 300;
  * the model is unsure.
  */
 export const SSD_TRACKER = Object.freeze({ high_score: 0.5, new_track_score: 0.6 });
+
+/** Most frames `minFrames` may ask for (a minute at 16 fps: beyond it no track would show). */
+export const MAX_MIN_FRAMES = 1000;
+
+/**
+ * `tracker` with its shortest track set to `minFrames` frames (undefined: unchanged). An object
+ * detector floods a busy scene with one-off boxes (a shoe, a chair for a stroller); the
+ * tracker's own confirmation is the filter: a track is confirmed once matched `minFrames`
+ * times (its tentative frames are then reported too, so nothing of a kept track is lost) and
+ * a tentative one dies after its allowed misses. `min_hits_floor` holds the count at the
+ * video's frame rate (the tracker scales `min_hits` with it otherwise).
+ * @template {object} T
+ * @param {T} tracker
+ * @param {number | undefined} minFrames
+ * @returns {T | (T & { min_hits: number, min_hits_floor: number })}
+ */
+export function withMinFrames(tracker, minFrames) {
+  if (minFrames === undefined) return tracker;
+  if (!(Number.isInteger(minFrames) && minFrames >= 1 && minFrames <= MAX_MIN_FRAMES)) {
+    throw new Error(`minFrames must be a whole number from 1 to ${MAX_MIN_FRAMES}, not ${minFrames}`);
+  }
+  return { ...tracker, min_hits: minFrames, min_hits_floor: minFrames };
+}
 
 /**
  * @typedef {{
@@ -243,6 +268,7 @@ export function ssdDetector(options = {}) {
   const maxRefined = options.maxRefined ?? MAX_REFINED;
   if (!(Number.isInteger(maxRefined) && maxRefined >= 0)) throw new Error(`SSD detector: maxRefined must be a whole number ≥ 0, not ${maxRefined}`);
   if (!(typeof minScore === 'number' && minScore >= 0 && minScore <= 1)) throw new Error(`SSD detector: minScore must be in [0, 1], not ${minScore}`);
+  const tracker = withMinFrames(SSD_TRACKER, options.minFrames);
   /** @type {LoadedModel | null} */
   let model = null;
   /** @type {Set<number> | null} the classes kept (null: all) */
@@ -286,7 +312,7 @@ export function ssdDetector(options = {}) {
   /** @type {Detector & { classes: string[] }} */
   const detector = {
     name: moving ? 'ssd-moving' : 'ssd',
-    tracker: SSD_TRACKER,
+    tracker,
     classes: [],
     async init({ core }) {
       loading ??= loadModel().catch((e) => {
