@@ -527,6 +527,19 @@ test('the layout holds from 1024×768 to 1920×1080 with a track selected: the T
     const list = await page.locator('#track-list').boundingBox();
     assert.ok(list && list.height >= 100, `${width}×${height}: the track list is ${list?.height} px high`);
   }
+  // The widest toolbar (an object detector's filter shown) wraps: every control is on screen.
+  await page.selectOption('#detector', 'moving-ssd');
+  for (const [width, height] of [[1024, 768], [1920, 1080]]) {
+    await page.setViewportSize({ width, height });
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r(undefined))));
+    const off = await page.$$eval('header.bar input, header.bar select, header.bar button', (els) =>
+      els.flatMap((e) => {
+        const r = e.getBoundingClientRect();
+        return r.width > 0 && (r.left < 0 || r.right > window.innerWidth) ? [`${e.id || e.textContent}: ${Math.round(r.left)}–${Math.round(r.right)}`] : [];
+      }),
+    );
+    assert.deepEqual(off, [], `${width}×${height}: controls off screen`);
+  }
   assert.deepEqual(errors, []);
   await page.close();
 });
