@@ -1464,6 +1464,74 @@ fn add_uncovered_appends_only_what_the_list_does_not_hold() {
 }
 
 #[wasm_bindgen_test]
+fn drop_parts_leaves_out_parts_lying_on_a_larger_detection_and_nothing_else() {
+    // Classes: 4 a person, 19 a shoe (a part), 23 a car (never a part), -1 a moving blob.
+    const SHOE: i32 = 19;
+    let mask = |x: u32, y: u32, w: u32, h: u32, score: f64, class: i32| {
+        serde_json::json!({ "x": x, "y": y, "width": w, "height": h,
+            "data": vec![1u8; (w * h) as usize], "score": score, "class": class })
+    };
+    let shoe_box = |x: f64, y: f64| serde_json::json!({ "bbox": { "x": x, "y": y, "w": 4, "h": 4 }, "score": 0.7, "class": SHOE });
+    let scores = |d: &Detections| -> Vec<f64> {
+        let l: Vec<Listed> = serde_wasm_bindgen::from_value(d.to_list().unwrap().into()).unwrap();
+        l.iter().map(|d| d.score).collect()
+    };
+    let list = |v: serde_json::Value| Detections::from_lists(ts(js(&v))).unwrap();
+    // A person (20x40); a shoe mask on it; a shoe box half on it; a shoe mask a quarter on
+    // it; a car mask wholly on it (not a part class); a shoe beside it.
+    let mut d = list(serde_json::json!({
+        "masks": [mask(0, 0, 20, 40, 0.9, 4), mask(2, 36, 4, 4, 0.8, SHOE),
+                  mask(19, 0, 4, 4, 0.6, SHOE), mask(4, 4, 4, 4, 0.5, 23),
+                  mask(40, 0, 6, 6, 0.4, SHOE)],
+        "boxes": [shoe_box(18.0, 30.0)],
+    }));
+    assert_eq!(d.drop_parts(&[SHOE], 0.5, 4.0).unwrap(), 2);
+    assert_eq!(
+        scores(&d),
+        vec![0.9, 0.6, 0.5, 0.4],
+        "the shoe on it and the half-on box go"
+    );
+    // No part classes: nothing goes. At 0.8 the box half on the person stays.
+    let two = || {
+        list(
+            serde_json::json!({ "masks": [mask(0, 0, 20, 40, 0.9, 4)], "boxes": [shoe_box(18.0, 30.0)] }),
+        )
+    };
+    assert_eq!(two().drop_parts(&[], 0.5, 4.0).unwrap(), 0);
+    assert_eq!(two().drop_parts(&[SHOE], 0.8, 4.0).unwrap(), 0);
+    // A blob twice the size of each of two parts under it holds them at ratio 2, not 4.
+    let pair = || {
+        list(serde_json::json!({ "masks": [mask(0, 0, 20, 20, 0.3, -1),
+            mask(0, 0, 10, 20, 0.9, SHOE), mask(10, 0, 10, 20, 0.8, SHOE)] }))
+    };
+    assert_eq!(pair().drop_parts(&[SHOE], 0.5, 4.0).unwrap(), 0);
+    assert_eq!(pair().drop_parts(&[SHOE], 0.5, 2.0).unwrap(), 2);
+    // A box holds a part too (a person's box not refined into a mask); two equal masks do
+    // not hold each other.
+    let mut d = list(serde_json::json!({
+        "masks": [mask(2, 2, 4, 4, 0.8, SHOE), mask(30, 0, 8, 8, 0.7, SHOE), mask(30, 0, 8, 8, 0.6, SHOE)],
+        "boxes": [{ "bbox": { "x": 0, "y": 0, "w": 20, "h": 20 }, "score": 0.9, "class": 4 }],
+    }));
+    assert_eq!(d.drop_parts(&[SHOE], 0.5, 1.0).unwrap(), 1);
+    assert_eq!(
+        scores(&d),
+        vec![0.7, 0.6, 0.9],
+        "the shoe in the box goes, the equal pair stays"
+    );
+    for (share, ratio) in [
+        (0.0, 4.0),
+        (1.5, 4.0),
+        (f64::NAN, 4.0),
+        (0.5, 0.5),
+        (0.5, f64::INFINITY),
+    ] {
+        let msg = error_message(d.drop_parts(&[SHOE], share, ratio).err().unwrap());
+        assert!(msg.contains("dropParts"), "{share} {ratio}: {msg}");
+    }
+    assert_eq!(d.len(), 3, "a refused call changes nothing");
+}
+
+#[wasm_bindgen_test]
 fn boxes_of_any_size_are_compared_and_filled_without_rasterising_them_whole() {
     // A JS detector may hand in a box far larger than the frame (a bug, a unit mix-up): it
     // must cost at most the frame, never exhaust wasm memory.

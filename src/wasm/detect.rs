@@ -166,6 +166,52 @@ impl Detections {
         Ok(added)
     }
 
+    /// Leaves out the detections that are parts of another: one whose class is among
+    /// `classes` is dropped when at least `share` (in `(0, 1]`) of its pixels lie on a single
+    /// other detection (its mask, or its box without one) of at least `ratio` (≥ 1) times its
+    /// area (and strictly more). Returns how many were dropped. An object detector reports
+    /// what a person wears (shoes) beside the person, and a moving blob covers a person the
+    /// detector only saw the shoes of: each would become a track of its own on the same
+    /// object. Only the classes that are parts can go: a car inside a larger blob is a car the
+    /// blob wrongly took in with its surroundings, not a part of it.
+    #[wasm_bindgen(js_name = dropParts)]
+    pub fn drop_parts(&mut self, classes: &[i32], share: f64, ratio: f64) -> Result<u32, JsValue> {
+        if !(share.is_finite() && share > 0.0 && share <= 1.0) {
+            return Err(js_error(BindingError::Invalid(format!(
+                "dropParts: share must be in (0, 1], not {share}"
+            ))));
+        }
+        if !(ratio.is_finite() && ratio >= 1.0) {
+            return Err(js_error(BindingError::Invalid(format!(
+                "dropParts: ratio must be a number ≥ 1, not {ratio}"
+            ))));
+        }
+        let regions: Vec<Region> = self.inner.iter().map(Region::of).collect();
+        let areas: Vec<f64> = regions.iter().map(Region::area).collect();
+        let part: Vec<bool> = (0..regions.len())
+            .map(|i| {
+                let a = areas[i];
+                a > 0.0
+                    && classes.contains(&self.inner[i].class)
+                    && (0..regions.len()).any(|j| {
+                        j != i
+                            && areas[j] > a
+                            && areas[j] >= ratio * a
+                            && self.inner[i].bbox.intersection_area(&self.inner[j].bbox) > 0.0
+                            && regions[i].overlap(&regions[j]) >= share * a
+                    })
+            })
+            .collect();
+        drop(regions);
+        let dropped = part.iter().filter(|&&p| p).count();
+        let mut k = 0;
+        self.inner.retain(|_| {
+            k += 1;
+            !part[k - 1]
+        });
+        Ok(u32::try_from(dropped).unwrap_or(u32::MAX))
+    }
+
     /// The detections as plain JS objects (copies the masks).
     #[wasm_bindgen(js_name = toList)]
     pub fn to_list(&self) -> Result<Ts<DetectionList>, JsValue> {

@@ -383,15 +383,18 @@ test('bad files are refused with a message, not a crash', async () => {
 // network itself is not in this module (onnxruntime-web, loaded on first use). 804 → 812 KB
 // with issue 65's input checks in the core the module carries (the caps checked when objects
 // are built, the kept-history cap, the readers' id and mask-size checks, errors that name the
-// field with numbers printed short: 799 → 809.1 KiB).
-test('wasm is at most 812 KB gzipped', () => {
+// field with numbers printed short: 799 → 809.1 KiB). 812 → 816 KB with
+// `Detections.dropParts` (an object detector's parts of a person are not tracks of their own:
+// 810.5 → 812.1 KiB; DAVIS tennis, moving camera + SSD, frames with a second track on the
+// player 60 of 70 → 1).
+test('wasm is at most 816 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
   assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
   const bytes = readFileSync(join(dir, wasm[0]));
   const gz = gzipSync(bytes, { level: 9 }).length;
   console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
-  assert.ok(gz <= 812 * 1024, `${gz} bytes gzipped`);
+  assert.ok(gz <= 816 * 1024, `${gz} bytes gzipped`);
 });
 
 test('edits not exported are never replaced without a question: demo, import and closing the tab ask first', async () => {

@@ -6,7 +6,7 @@
 // turns into a `Detections` handle with one call. Register another detector with
 // `registerDetector(name, factory)`; the page picks it by name.
 
-import { ssdDetector, withMinFrames } from './detectors/ssd.js';
+import { PARTS, ssdDetector, withMinFrames } from './detectors/ssd.js';
 
 /**
  * @typedef {import('../lib/core.js').Core} Core
@@ -291,7 +291,9 @@ function movingWithSsd(options) {
   const moving = movingCamera(/** @type {Record<string, unknown>} */ (options.moving ?? {}));
   const ssd = ssdDetector({ minScore: 0.5, .../** @type {import('./detectors/ssd.js').SsdOptions} */ (options.ssd ?? {}), movingCamera: true });
   const covered = /** @type {number} */ (options.covered ?? COVERED);
-  const tracker = withMinFrames(MOVING_TRACKER, /** @type {{ minFrames?: number }} */ (options.ssd ?? {}).minFrames);
+  const ssdOptions = /** @type {import('./detectors/ssd.js').SsdOptions} */ (options.ssd ?? {});
+  const tracker = withMinFrames(MOVING_TRACKER, ssdOptions.minFrames);
+  const parts = ssdOptions.parts === undefined ? PARTS : ssdOptions.parts;
   /** @type {Core | null} */
   let wasm = null;
   /** @type {Detector & { classes: string[] }} */
@@ -312,6 +314,8 @@ function movingWithSsd(options) {
         const objects = out instanceof wasm.Detections ? out : wasm.Detections.fromLists(out);
         try {
           objects.addUncovered(blobs, covered);
+          // A blob over a person the SSD saw only part of (the shoes) holds that part.
+          if (parts && ssd.partClasses.length) objects.dropParts(ssd.partClasses, parts.share, parts.ratio);
         } catch (e) {
           objects.free();
           throw e;

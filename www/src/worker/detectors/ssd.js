@@ -35,6 +35,7 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   maxRefined?: number,
  *   classes?: string[],
  *   minFrames?: number,
+ *   parts?: { classes: readonly string[], share: number, ratio: number } | false,
  * }} SsdOptions  `minScore`: lowest score passed to the tracker (default 0.3: low boxes only
  *   extend tracks, see SSD_TRACKER); `minFill`: foreground share of a box below which the
  *   background subtractor's mask is not used (default 0.2); `perClassNms`: suppress overlaps
@@ -42,7 +43,8 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  *   `RefineConfig` settings, `false` keeps filled boxes); `maxRefined`: most boxes refined per
  *   frame (default MAX_REFINED); `classes`: the class names kept (any case; absent or empty:
  *   all), a name the model does not know is an error at init; `minFrames`: shortest track
- *   kept (see `withMinFrames`)
+ *   kept (see `withMinFrames`); `parts`: when a detection inside another is left out
+ *   (default PARTS; `false` keeps them)
  */
 
 /**
@@ -51,6 +53,19 @@ import { DECODE, NMS, decode, foreground, maskInBox, nms, parseLabels, ssdAnchor
  * cost whatever the scene holds (MediaPipe keeps up to 100 boxes).
  */
 export const MAX_REFINED = 4;
+
+/**
+ * When a detection is a part of another and left out (`Detections.dropParts`): one of the
+ * model's classes that a person wears (`classes`) with `share` of its pixels on one other
+ * detection (its mask, or its box) at least `ratio` times its area. Each would otherwise be a track of its own
+ * on the person (issue 66: 78 "Footwear" tracks on one dancer). Only worn classes: any class
+ * allowed, a moving blob that took in a car with its surroundings swallowed the car (DAVIS
+ * car-shadow J 0.785 → 0.768, scooter-black 0.439 → 0.400). Half, not most: a shoe's box lies
+ * half on the person's outline (DAVIS tennis, moving camera + SSD: frames with a second track
+ * on the player 60 of 70 → 39 at 0.8, 1 at 0.5). Four times the area, not two: a blob over
+ * two people walking together must not hold them.
+ */
+export const PARTS = Object.freeze({ classes: Object.freeze(['Footwear', 'Boot', 'High heels']), share: 0.5, ratio: 4 });
 
 /** Side of the model's square input. */
 const INPUT = 300;
@@ -259,7 +274,7 @@ async function loadModel() {
 
 /**
  * @param {SsdOptions} options
- * @returns {Detector & { classes: string[] }}
+ * @returns {Detector & { classes: string[], partClasses: Int32Array }}
  */
 export function ssdDetector(options = {}) {
   const moving = options.movingCamera === true;
@@ -269,6 +284,7 @@ export function ssdDetector(options = {}) {
   if (!(Number.isInteger(maxRefined) && maxRefined >= 0)) throw new Error(`SSD detector: maxRefined must be a whole number ≥ 0, not ${maxRefined}`);
   if (!(typeof minScore === 'number' && minScore >= 0 && minScore <= 1)) throw new Error(`SSD detector: minScore must be in [0, 1], not ${minScore}`);
   const tracker = withMinFrames(SSD_TRACKER, options.minFrames);
+  const parts = options.parts === undefined ? PARTS : options.parts;
   /** @type {LoadedModel | null} */
   let model = null;
   /** @type {Set<number> | null} the classes kept (null: all) */
@@ -309,11 +325,13 @@ export function ssdDetector(options = {}) {
     return small.getImageData(0, 0, INPUT, INPUT).data;
   }
 
-  /** @type {Detector & { classes: string[] }} */
+  /** @type {Detector & { classes: string[], partClasses: Int32Array }} */
   const detector = {
     name: moving ? 'ssd-moving' : 'ssd',
     tracker,
     classes: [],
+    /** The model's indices of `parts.classes` (set at init). */
+    partClasses: new Int32Array(0),
     async init({ core }) {
       loading ??= loadModel().catch((e) => {
         loading = null; // let a later session retry (e.g. once back online)
@@ -323,6 +341,10 @@ export function ssdDetector(options = {}) {
       // The background class ("???") is never reported.
       detector.classes = model.labels.map((l, i) => (DECODE.ignoreClasses.includes(i) ? '' : l));
       keep = keptClasses(detector.classes, options.classes);
+      if (parts) {
+        const lower = parts.classes.map((c) => c.toLowerCase());
+        detector.partClasses = Int32Array.from(detector.classes.flatMap((c, i) => (c && lower.includes(c.toLowerCase()) ? [i] : [])));
+      }
       if (!moving) {
         bg = new core.BackgroundDetector(options.background);
       }
@@ -370,6 +392,7 @@ export function ssdDetector(options = {}) {
       const dets = wasm.Detections.fromLists({ masks, boxes });
       try {
         refiner.refine(frame.buffer, dets, maxRefined);
+        if (parts && detector.partClasses.length) dets.dropParts(detector.partClasses, parts.share, parts.ratio);
       } catch (e) {
         dets.free();
         throw e;
