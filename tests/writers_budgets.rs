@@ -47,6 +47,25 @@ fn scalabel_lists_every_frame_within_the_cap() {
     let frames = from_records(&[rec(3, 7)], "v", 5, None, &Categories::default());
     assert_eq!(frames.len(), 5);
     assert!(frames[0].labels.is_empty() && frames[2].labels.len() == 1);
+    // A video up to DENSE_FRAMES long is listed whole, however few its records.
+    let n = shapetrack::io::scalabel::DENSE_FRAMES;
+    let frames = from_records(&[rec(3, 7)], "v", n, None, &Categories::default());
+    assert_eq!(frames.len(), n as usize);
+}
+
+/// Within the frame cap but far beyond what the records fill, only the labelled frames are
+/// listed: one record at frame 2^20 (a probe's 4 KB input) was 2^20 frame entries and 1.9 GB.
+#[test]
+fn scalabel_lists_only_labelled_frames_of_a_mostly_empty_long_video() {
+    let records = [rec(1, 7), rec(2, 7), rec(MAX_FRAME, 8)];
+    let frames = from_records(&records, "v", 0, None, &Categories::default());
+    let index: Vec<u32> = frames.iter().map(|f| f.frame_index).collect();
+    assert_eq!(index, vec![0, 1, MAX_FRAME - 1]);
+    // Records on a quarter of the frames or more: listed whole.
+    let n = 3 * shapetrack::io::scalabel::DENSE_FRAMES;
+    let records: Vec<Record> = (1..=n / 4).map(|f| rec(4 * f - 3, 1)).collect();
+    let frames = from_records(&records, "v", n, None, &Categories::default());
+    assert_eq!(frames.len(), n as usize);
 }
 
 fn refused(r: Result<String, IoError>, what: &str) {
@@ -85,5 +104,49 @@ fn coco_video_writes_a_valid_video() {
     assert!(
         s.contains("\"bboxes\":[null,[1.0,2.0,3.0,4.0],null,[1.0,2.0,3.0,4.0]]"),
         "{s}"
+    );
+}
+
+/// COCO-video is written one track at a time: 8 tracks over 2^20 frames (8 M slots, the
+/// layout the format asks for) held every track's slots and values at once; now memory is
+/// the text and one track's slots (the same text, byte for byte).
+#[test]
+fn coco_video_from_the_cli_holds_one_track_at_a_time() {
+    let dir = std::env::temp_dir().join(format!("shapetrack-coco-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let det = dir.join("det.txt");
+    let mut text = String::new();
+    for id in 1..=8 {
+        for f in 1..=6 {
+            text.push_str(&format!("{f},-1,{},10,20,30,0.9,-1,-1,-1\n", 40 * id));
+        }
+    }
+    text.push_str(&format!("{MAX_FRAME},-1,5,5,20,30,0.9,-1,-1,-1\n"));
+    std::fs::write(&det, text).unwrap();
+    let out = dir.join("out.json");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_shapetrack"))
+        .args(["track", "--format", "coco", "--det"])
+        .arg(&det)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    let summary = String::from_utf8_lossy(&run.stdout);
+    let peak_kb: u64 = summary
+        .split("peak_mem_kb=")
+        .nth(1)
+        .and_then(|t| t.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no peak_mem_kb in {summary}"));
+    let bytes = std::fs::metadata(&out).unwrap().len();
+    let _ = std::fs::remove_dir_all(&dir);
+    // The text itself (176 MB), plus one track's slots (2^20 × ~100 B), plus the program:
+    // 318 MB; all tracks at once it was 788 MB.
+    assert!(
+        peak_kb * 1024 < 2 * bytes + (100 << 20),
+        "peak {peak_kb} kB for {bytes} bytes of output: {summary}"
     );
 }

@@ -80,3 +80,12 @@ pub const MAX_SELF_CROSSING_VERTICES: usize = 64;
 /// `max_det` is 300) or annotation (a MOT20 frame holds ~250 people) holds that many objects in
 /// one frame.
 pub const MAX_BOXES_PER_FRAME: usize = 2_000;
+
+/// Longest text file a reader takes whole (1 GiB; MOT20's largest ground truth is ~50 MB): a
+/// device such as `/dev/zero`, or a binary file given by mistake, is refused instead of read
+/// until memory runs out.
+pub const MAX_TEXT_BYTES: u64 = 1 << 30;
+
+/// Longest line a line-by-line reader takes (64 MiB: a MOTS line of an 8192×8192 mask's RLE
+/// stays far below), so that a file without line breaks is refused after 64 MiB, not 1 GiB.
+pub const MAX_LINE_BYTES: u64 = 1 << 26;

@@ -137,14 +137,54 @@ impl IoError {
 /// is dropped: editors on Windows write one, and left in place it would be part of the first
 /// field (a MOT frame number that fails to parse, a JSON file taken for text).
 pub fn read_text(path: &std::path::Path) -> Result<String, IoError> {
-    let mut text = std::fs::read_to_string(path).map_err(|source| IoError::Io {
+    use std::io::Read as _;
+    let io = |source| IoError::Io {
         file: path.display().to_string(),
         source,
-    })?;
+    };
+    // At most one byte past the cap is read (a device's length says nothing: /dev/zero's is 0).
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(limits::MAX_TEXT_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(io)?;
+    if text.len() as u64 > limits::MAX_TEXT_BYTES {
+        return Err(IoError::Invalid {
+            file: path.display().to_string(),
+            line: 1,
+            message: format!(
+                "longer than {} MiB: not a text file this project reads",
+                limits::MAX_TEXT_BYTES >> 20
+            ),
+        });
+    }
+    lone_carriage_returns(path, &text)?;
     if text.starts_with(BOM) {
         text.drain(..BOM.len_utf8());
     }
     Ok(text)
+}
+
+/// Refuses text whose lines end in a carriage return alone (classic Mac OS): read by lines
+/// that end in `\n`, the whole file would be one line and every field past the first
+/// record's silently ignored. `\r\n` (Windows) is fine.
+pub fn lone_carriage_returns(path: &std::path::Path, text: &str) -> Result<(), IoError> {
+    let bytes = text.as_bytes();
+    match bytes
+        .iter()
+        .enumerate()
+        .find(|&(i, &b)| b == b'\r' && bytes.get(i + 1) != Some(&b'\n'))
+    {
+        Some((i, _)) => Err(IoError::Invalid {
+            file: path.display().to_string(),
+            line: line_col(text, i).0,
+            message: "a line ends in a carriage return alone (classic Mac line endings): \
+                      save the file with LF or CRLF line endings"
+                .into(),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The UTF-8 byte-order mark (U+FEFF) some editors put at the start of a text file.

@@ -105,6 +105,14 @@ impl SynthConfig {
             });
         }
         range("fps", self.fps, 1e-3, 1e4)?;
+        // A sequence's frame numbers stop at the readers' cap: a longer scene writes frames
+        // (and ground truth) that no command of this project reads back.
+        range(
+            "frames",
+            f64::from(self.frames),
+            1.0,
+            f64::from(crate::io::limits::MAX_FRAME),
+        )?;
         let m = &self.motion;
         pair("motion.radius", m.radius, 2.0, 500.0)?;
         pair("motion.speed", m.speed, 0.0, 1000.0)?;

@@ -318,6 +318,41 @@ fn score(
 }
 
 pub fn run(args: Args) -> crate::CliResult {
+    // Every file under a --davis folder may be read (frames, ground truth): --frames-out must
+    // not replace one of them.
+    if let Some(out) = args.frames_out.as_ref().filter(|p| p.exists()) {
+        let out = out.canonicalize()?;
+        if let Some(root) = args
+            .davis
+            .iter()
+            .find(|r| r.canonicalize().is_ok_and(|r| out.starts_with(r)))
+        {
+            return Err(format!(
+                "--frames-out {} lies in the dataset {} this run reads: write it somewhere else",
+                out.display(),
+                root.display()
+            )
+            .into());
+        }
+    }
+    // A sequence asked for by name that no --davis folder holds is a typo, not an empty table.
+    let mut found = std::collections::BTreeSet::new();
+    for root in &args.davis {
+        for dir in sequences(root, &args.sequences)? {
+            found.extend(dir.file_name().map(|n| n.to_string_lossy().into_owned()));
+        }
+    }
+    if let Some(missing) = args.sequences.iter().find(|s| !found.contains(s.as_str())) {
+        return Err(format!(
+            "--sequences {missing}: no such sequence in {} (under DAVIS/JPEGImages/480p)",
+            args.davis
+                .iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+        .into());
+    }
     let refine: RefineConfig = match &args.refine {
         Some(j) => serde_json::from_str(j)?,
         None => RefineConfig::default(),

@@ -71,9 +71,11 @@ pub struct Args {
     sequence: Option<String>,
 }
 
-fn image_size(dir: &Path) -> Option<(u32, u32)> {
+/// The size of the sequence's first image, and that image (a file the run reads).
+fn image_size(dir: &Path) -> Option<((u32, u32), PathBuf)> {
     let imgs = shapetrack::io::image_files(dir).ok()?;
-    image::image_dimensions(imgs.first()?).ok()
+    let first = imgs.into_iter().next()?;
+    Some((image::image_dimensions(&first).ok()?, first))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -129,7 +131,10 @@ pub fn run(args: Args) -> crate::CliResult {
     };
     let size = match &args.size {
         Some(s) => Some(parse_size(s)?),
-        None => image_size(&seq_dir),
+        None => image_size(&seq_dir).map(|(size, first)| {
+            read.push(first);
+            size
+        }),
     };
     let bounds = if args.unbounded { None } else { size };
     let toolkit = !args.exact || args.toolkit;

@@ -489,6 +489,17 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
             .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
             .unwrap_or_else(|| "sequence".into())
     });
+    // The name becomes part of each result file's name in --out: a path there
+    // (`../../x`) would write outside it.
+    let plain = std::path::Path::new(&seq)
+        .file_name()
+        .is_some_and(|n| n == std::ffi::OsStr::new(&seq));
+    if !plain || seq == ".." {
+        return Err(format!(
+            "--sequence {seq:?}: a name, not a path (result files are written in --out)"
+        )
+        .into());
+    }
     std::fs::create_dir_all(&args.out)?;
     let net = shared_net(args.model.as_deref(), args.net_cache.clone(), "vot")?;
     let n = files.len();

@@ -135,11 +135,16 @@ pub fn run(args: Args) -> crate::CliResult {
     if let Some(joins) = &args.joins {
         crate::outputs::refuse_same_output("--out", &args.out, "--joins", joins)?;
     }
+    // The seqinfo found beside --det is read as much as one given: it is an input too.
+    let seqinfo_path = args.seqinfo.clone().or_else(|| {
+        let p = args.det.parent()?.parent()?.join("seqinfo.ini");
+        p.is_file().then_some(p)
+    });
     let inputs = [
         Some(&args.det),
         args.config.as_ref(),
         args.offline_config.as_ref(),
-        args.seqinfo.as_ref(),
+        seqinfo_path.as_ref(),
     ];
     for input in inputs.into_iter().flatten() {
         for out in std::iter::once(&args.out).chain(args.joins.as_ref()) {
@@ -227,10 +232,6 @@ pub fn run(args: Args) -> crate::CliResult {
             .map_err(|e| format!("{}: {e}", p.display()))?;
     }
 
-    let seqinfo_path = args.seqinfo.clone().or_else(|| {
-        let p = args.det.parent()?.parent()?.join("seqinfo.ini");
-        p.is_file().then_some(p)
-    });
     let seqinfo = seqinfo_path.as_deref().map(SeqInfo::read).transpose()?;
     let seq_size = seqinfo
         .as_ref()

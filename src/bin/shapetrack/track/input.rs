@@ -86,15 +86,70 @@ pub(super) struct Scan {
     pub(super) mask_size: Option<(u32, u32)>,
 }
 
-pub(super) fn open_lines(
-    path: &Path,
-) -> Result<std::io::Lines<std::io::BufReader<std::fs::File>>, IoError> {
-    use std::io::BufRead as _;
+pub(super) fn open_lines(path: &Path) -> Result<Lines, IoError> {
     let f = std::fs::File::open(path).map_err(|source| IoError::Io {
         file: path.display().to_string(),
         source,
     })?;
-    Ok(std::io::BufReader::new(f).lines())
+    Ok(Lines {
+        reader: std::io::BufReader::new(f),
+        buf: Vec::new(),
+        line: 0,
+    })
+}
+
+/// The lines of a text detection file (without their `\n` or `\r\n`), as `BufRead::lines`
+/// gives them but bounded: a line longer than `limits::MAX_LINE_BYTES` (a device, a binary
+/// file) or ending in a carriage return alone (classic Mac line endings: the whole file would
+/// read as one line, every record past the first silently dropped) is an error naming it.
+pub(crate) struct Lines {
+    reader: std::io::BufReader<std::fs::File>,
+    buf: Vec<u8>,
+    line: usize,
+}
+
+impl Iterator for Lines {
+    type Item = std::io::Result<String>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        use std::io::{BufRead as _, Read as _};
+        let cap = shapetrack::io::limits::MAX_LINE_BYTES;
+        let bad = |msg: String| std::io::Error::new(std::io::ErrorKind::InvalidData, msg);
+        self.buf.clear();
+        match (&mut self.reader)
+            .take(cap + 1)
+            .read_until(b'\n', &mut self.buf)
+        {
+            Ok(0) => return None,
+            Ok(_) => {}
+            Err(e) => return Some(Err(e)),
+        }
+        self.line += 1;
+        if self.buf.len() as u64 > cap {
+            return Some(Err(bad(format!(
+                "line {} is longer than {} MiB: not a text detection file",
+                self.line,
+                cap >> 20
+            ))));
+        }
+        if self.buf.last() == Some(&b'\n') {
+            self.buf.pop();
+            if self.buf.last() == Some(&b'\r') {
+                self.buf.pop();
+            }
+        }
+        if self.buf.contains(&b'\r') {
+            return Some(Err(bad(format!(
+                "line {} ends in a carriage return alone (classic Mac line endings): save the \
+                 file with LF or CRLF line endings",
+                self.line
+            ))));
+        }
+        Some(
+            String::from_utf8(std::mem::take(&mut self.buf))
+                .map_err(|_| bad(format!("line {} is not UTF-8 text", self.line))),
+        )
+    }
 }
 
 /// Reads line `ln` of a text detection file (I/O errors name the file).
@@ -199,7 +254,7 @@ pub(super) enum Groups {
     Loaded { records: Vec<Record>, at: usize },
     /// A text file sorted by frame, read line by line.
     Stream {
-        lines: std::io::Lines<std::io::BufReader<std::fs::File>>,
+        lines: Lines,
         path: PathBuf,
         mots: bool,
         ln: usize,
