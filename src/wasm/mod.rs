@@ -14,7 +14,8 @@
 //! One module per area, each small (a test keeps every file under 500 lines); everything
 //! public is re-exported here, so the JS API and `shapetrack::wasm::*` are one flat namespace:
 //! `frame` (frame buffers, boxes, masks), `annotations` (file formats), `detect` (detections,
-//! background and moving-camera detectors, camera judge), `settings` (settings objects: partial JSON over the core's config
+//! background and moving-camera detectors, camera judge; `region`, not exported, is the pixels
+//! its overlap tests compare), `settings` (settings objects: partial JSON over the core's config
 //! types, typed from them), `offline` (the offline pass' progress and result), `tracker`, `synth` (the demo scene), `eval` (metrics), `follow` (following one given shape, keyframe interpolation), and `error` (how
 //! failures become JS `Error`s; not exported).
 
@@ -25,6 +26,7 @@ mod eval;
 mod follow;
 mod frame;
 mod offline;
+mod region;
 mod segment;
 mod settings;
 mod synth;
