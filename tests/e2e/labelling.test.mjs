@@ -473,10 +473,13 @@ test('fields and shortcuts: Esc in the new-id field keeps the selection; a short
   await page.setInputFiles('#file-import', { name: gt.name, mimeType: 'text/plain', buffer: Buffer.from(gt.text) });
   await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.state().ids.length > 0);
   const state = () => page.evaluate(() => /** @type {any} */ (window).__shapetrack.state());
+  // The import goes on after its tracks are in the table (it seeks to its first frame): let
+  // it finish before selecting, so nothing it does lands between the N and the check below.
+  await page.waitForFunction(() => /** @type {any} */ (window).__shapetrack.app.showing === null);
   const first = (await state()).ids[0];
   await page.evaluate((id) => /** @type {any} */ (window).__shapetrack.app.select(id, false), first);
   await page.keyboard.press('n');
-  assert.ok(await page.locator('#renumber-input').isVisible());
+  await page.locator('#renumber-input').waitFor({ state: 'visible', timeout: 10_000 });
   await page.press('#renumber-input', 'Escape');
   assert.ok(!(await page.locator('#renumber-input').isVisible()), 'Esc closes the new-id field');
   assert.deepEqual((await state()).selection, { a: first, b: null }, 'and keeps the selection');
