@@ -318,22 +318,9 @@ fn score(
 }
 
 pub fn run(args: Args) -> crate::CliResult {
-    // Every file under a --davis folder may be read (frames, ground truth): --frames-out must
-    // not replace one of them.
-    if let Some(out) = args.frames_out.as_ref().filter(|p| p.exists()) {
-        let out = out.canonicalize()?;
-        if let Some(root) = args
-            .davis
-            .iter()
-            .find(|r| r.canonicalize().is_ok_and(|r| out.starts_with(r)))
-        {
-            return Err(format!(
-                "--frames-out {} lies in the dataset {} this run reads: write it somewhere else",
-                out.display(),
-                root.display()
-            )
-            .into());
-        }
+    // Every file under a --davis folder may be read (frames, ground truth).
+    if let Some(out) = &args.frames_out {
+        crate::outputs::refuse_inside("--frames-out", out, &args.davis)?;
     }
     // A sequence asked for by name that no --davis folder holds is a typo, not an empty table.
     let mut found = std::collections::BTreeSet::new();

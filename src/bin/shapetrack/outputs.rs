@@ -61,6 +61,26 @@ where
     Ok(())
 }
 
+/// Refuses `out` (given as `flag`) when it is an existing file inside one of `folders`, a
+/// dataset whose every file the run may read, naming both.
+pub fn refuse_inside(flag: &str, out: &Path, folders: &[PathBuf]) -> crate::CliResult {
+    let Ok(out) = out.canonicalize() else {
+        return Ok(());
+    };
+    match folders
+        .iter()
+        .find(|d| d.canonicalize().is_ok_and(|d| out.starts_with(d)))
+    {
+        Some(d) => Err(format!(
+            "{flag} {} lies in the dataset {} this run reads: write it somewhere else",
+            out.display(),
+            d.display()
+        )
+        .into()),
+        None => Ok(()),
+    }
+}
+
 /// The process's peak resident memory (Linux `VmHWM`), for a command's summary line: a long
 /// video must not make it grow (`track`'s online output and `vot`'s frames stream).
 pub fn peak_memory_kb() -> Option<u64> {
