@@ -7,7 +7,7 @@
 
 import { after, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { AGREE_IOU, CARRY_FRAMES, IDLE_THREADS, LearnedKeyframes, REGION_FRAMES, maskIou, shiftMask, wantedThreads } from '../src/worker/learned.js';
+import { AGREE_IOU, CARRY_FRAMES, IDLE_THREADS, KEYFRAME_DUTY, KEYFRAME_EVERY, KEYFRAME_MIN_GAP, KeyframeSchedule, LearnedKeyframes, REGION_FRAMES, maskIou, shiftMask, wantedThreads } from '../src/worker/learned.js';
 
 /**
  * @typedef {{ bbox: { x: number, y: number, w: number, h: number }, mask?: any, score: number, class: number }} Det
@@ -149,4 +149,26 @@ test('the net has every core while only drawn boxes use it, one thread while key
   assert.equal(wantedThreads(), 1, 'one stage still runs');
   b.dispose();
   assert.equal(wantedThreads(), IDLE_THREADS);
+});
+
+test('keyframes every KEYFRAME_EVERY frames, sooner when the detections change, never while the net is owed rest', () => {
+  const s = new KeyframeSchedule();
+  assert.ok(s.due(1, 2, 0), 'the first frame is a keyframe');
+  s.started(1, 2);
+  s.finished(0, 0);
+  assert.ok(!s.due(1 + KEYFRAME_EVERY - 1, 2, 0), 'same detections: not before KEYFRAME_EVERY frames');
+  assert.ok(s.due(1 + KEYFRAME_EVERY, 2, 0));
+  assert.ok(!s.due(1 + KEYFRAME_MIN_GAP - 1, 3, 0), 'a new detection: not before KEYFRAME_MIN_GAP frames');
+  assert.ok(s.due(1 + KEYFRAME_MIN_GAP, 3, 0));
+  // A keyframe whose inferences took 2 s, ending at t = 10 s: the net rests until its busy
+  // share is KEYFRAME_DUTY, whatever the frame count says.
+  s.started(100, 3);
+  s.finished(2000, 10_000);
+  const rest = 2000 * (1 / KEYFRAME_DUTY - 1);
+  assert.ok(rest > 0);
+  assert.ok(!s.due(100 + KEYFRAME_EVERY, 3, 10_000 + rest - 1), 'owed rest: no keyframe');
+  assert.ok(!s.due(100 + KEYFRAME_EVERY, 5, 10_000 + rest - 1), 'not even for a new detection');
+  assert.ok(s.due(100 + KEYFRAME_EVERY, 3, 10_000 + rest));
+  // The busy share over a keyframe and its rest is KEYFRAME_DUTY.
+  assert.ok(Math.abs(2000 / (2000 + rest) - KEYFRAME_DUTY) < 1e-12);
 });

@@ -94,8 +94,9 @@ export function warmLearned({ run = true } = {}) {
  * @param {import('../../pkg/shapetrack.js').SegmentJob} job
  * @param {FrameBuffer} buf
  * @param {(p: LearnedProgress) => void} [onProgress]
+ * @param {() => void} [onLoaded] called once the net is loaded, before its first inference
  */
-async function runJob(job, buf, onProgress) {
+async function runJob(job, buf, onProgress, onLoaded) {
   const seg = segmenter();
   // Only a caller that reports progress sets it: a keyframe in the background must not
   // silence a drawn box's progress bar.
@@ -106,6 +107,7 @@ async function runJob(job, buf, onProgress) {
     forgetSegmenter();
     throw e;
   }
+  onLoaded?.();
   while (job.remaining > 0) {
     // `input` returns a Float32Array of its own (copied out of wasm memory): transferred.
     const input = job.input(buf);
@@ -212,6 +214,63 @@ export const KEYFRAME_EVERY = 50;
  */
 export const KEYFRAME_MIN_GAP = 10;
 
+/**
+ * Most of the wall time the net may spend on keyframes: after a keyframe whose inferences took
+ * `t` ms, the next starts `t·(1/KEYFRAME_DUTY − 1)` ms after it ended at the soonest. The
+ * frame counts above assume the net keeps up with them; on a slow or busy machine an inference
+ * takes seconds and keyframes 50 frames apart ran back to back, taking a quarter of the
+ * tracker's rate on two cores (16.4 → 12.6 fps, scripts/bench-learned-fps.mjs, 2026-12-06).
+ * A bound in time follows the machine: a fast one keeps its keyframes every 50 frames, a slow
+ * one spaces them out instead of losing frames.
+ */
+export const KEYFRAME_DUTY = 1 / 3;
+/**
+ * When a keyframe may start (see `LearnedKeyframes`): every `KEYFRAME_EVERY` frames, every
+ * `KEYFRAME_MIN_GAP` while the number of detections changes, and never while the net is still
+ * owed rest (`KEYFRAME_DUTY`). Kept apart from the class so that the rule is tested without a
+ * net.
+ */
+export class KeyframeSchedule {
+  constructor() {
+    this.lastStart = -Infinity;
+    /** detections of the last keyframe */
+    this.lastCount = -1;
+    /** the soonest time (ms, `performance.now()`'s clock) the next keyframe may start */
+    this.readyAt = -Infinity;
+  }
+
+  /**
+   * Whether a keyframe may start on frame `frame`, which has `count` detections, at `now`.
+   * @param {number} frame
+   * @param {number} count
+   * @param {number} now
+   */
+  due(frame, count, now) {
+    if (now < this.readyAt) return false;
+    const since = frame - this.lastStart;
+    return since >= KEYFRAME_MIN_GAP && (since >= KEYFRAME_EVERY || count !== this.lastCount);
+  }
+
+  /**
+   * A keyframe started on frame `frame` with `count` detections.
+   * @param {number} frame
+   * @param {number} count
+   */
+  started(frame, count) {
+    this.lastStart = frame;
+    this.lastCount = count;
+  }
+
+  /**
+   * The keyframe's inferences took `busy` ms (the net's load excluded: it happens once) and
+   * ended at `now`.
+   * @param {number} busy
+   * @param {number} now
+   */
+  finished(busy, now) {
+    this.readyAt = now + Math.max(0, busy) * (1 / KEYFRAME_DUTY - 1);
+  }
+}
 /**
  * Crops per keyframe beyond the whole-frame pass (the core's `max_crops`), the highest
  * detection score first: two inferences a keyframe (4 s or more on this 2-core machine) keep
@@ -340,7 +399,8 @@ const centre = (b) => [b.x + b.w / 2, b.y + b.h / 2];
  * The learned stage of the automatic (or any) detector, never in the way of the frames:
  *
  * 1. `keyframe`: when no keyframe is under way and `KEYFRAME_EVERY` frames have passed (or
- *    `KEYFRAME_MIN_GAP`, when the number of detections changed), the frame is copied and a `SegmentJob` started on the copy with the frame's detections as
+ *    `KEYFRAME_MIN_GAP`, when the number of detections changed), and the net has rested
+ *    enough since the last one (`KEYFRAME_DUTY`, `KeyframeSchedule`), the frame is copied and a `SegmentJob` started on the copy with the frame's detections as
  *    boxes, in `proposals` mode (the whole frame first: salient regions no detection covers
  *    are added, objects that stand still), `KEYFRAME_CROPS` crops at most. It runs on the
  *    segmenter worker while the tracker goes on with the weights-free masks.
@@ -371,9 +431,7 @@ export class LearnedKeyframes {
     this.copy = null;
     /** @type {Promise<void> | null} */
     this.running = null;
-    this.lastStart = -Infinity;
-    /** detections of the last keyframe */
-    this.lastCount = -1;
+    this.schedule = new KeyframeSchedule();
     /** @type {{ frame: number, arrived: number, inputs: Box[], learned: DetectionJs[] } | null}
      * the latest keyframe's result (`arrived`: the first frame it was applied to) */
     this.result = null;
@@ -402,8 +460,7 @@ export class LearnedKeyframes {
    */
   keyframe(frame, pixels, dets, memory) {
     if (this.running || this.failed || this.disposed) return;
-    const since = frame - this.lastStart;
-    if (since < KEYFRAME_MIN_GAP || (since < KEYFRAME_EVERY && dets.len === this.lastCount)) return;
+    if (!this.schedule.due(frame, dets.len, performance.now())) return;
     this.copy ??= new this.core.FrameBuffer(this.width, this.height);
     // Views made after the allocation above: it may have grown (and detached) wasm memory.
     new Uint8ClampedArray(memory.buffer, this.copy.ptr(), this.copy.len()).set(pixels());
@@ -420,12 +477,16 @@ export class LearnedKeyframes {
     } finally {
       boxes.free();
     }
-    this.lastStart = frame;
-    this.lastCount = given.length;
+    this.schedule.started(frame, given.length);
     const copy = this.copy;
     const t0 = performance.now();
-    this.running = runJob(job, copy)
+    let loaded = t0;
+    this.running = runJob(job, copy, undefined, () => {
+      loaded = performance.now();
+    })
       .then(() => {
+        const now = performance.now();
+        this.schedule.finished(now - loaded, now);
         const done = job.finish();
         try {
           if (!this.disposed) {
