@@ -579,3 +579,77 @@ fn a_learned_outline_that_takes_in_a_neighbour_is_refused_past_the_growth_bound(
     let got = follow_learned(10, &unbounded, with_neighbour);
     assert!(got.iter().any(|&(iou, l)| l && iou < 0.8), "{got:.3?}");
 }
+
+/// Frame `i` of a camera panning with its target: a coarse-blotched reddish square that
+/// stays nearly put (0.5 px a frame) over a finely textured background sliding left 6 px a
+/// frame. Returns the frame and the square's mask.
+fn render_panning(i: usize) -> (Vec<u8>, Mask) {
+    const PW: u32 = 220;
+    let (x0, y0, side) = (80.0 + 0.5 * i as f64, 40.0, 40.0);
+    let mut rgb = Vec::with_capacity((PW * H * 3) as usize);
+    let mut truth = vec![0u8; (PW * H) as usize];
+    for y in 0..H {
+        for x in 0..PW {
+            let (fx, fy) = (x as f64 + 0.5, y as f64 + 0.5);
+            let inside = fx >= x0 && fx < x0 + side && fy >= y0 && fy < y0 + side;
+            let px = if inside {
+                truth[(y * PW + x) as usize] = 1;
+                let v = hash(
+                    ((fx - x0) / 6.0).floor() as i64,
+                    ((fy - y0) / 6.0).floor() as i64,
+                    11,
+                );
+                [(150.0 + 100.0 * v) as u8, (40.0 + 100.0 * v) as u8, 40]
+            } else {
+                let bx = x as i64 + 6 * i as i64;
+                let v = hash(bx / 3, y as i64 / 3, 5);
+                [
+                    (20.0 + 200.0 * v) as u8,
+                    (60.0 + 160.0 * v) as u8,
+                    (200.0 * (1.0 - v)) as u8,
+                ]
+            };
+            rgb.extend_from_slice(&px);
+        }
+    }
+    (rgb, Mask::from_full(PW, H, &truth).unwrap())
+}
+
+#[test]
+fn a_mask_that_takes_in_background_does_not_slide_off_with_a_panning_camera() {
+    // The given mask holds the square and a strip of the background beside it (a first mask
+    // a little loose, or the pole the object passes in DAVIS scooter-gray): its keypoints all
+    // move with the background, which the camera's pan makes fast. Fitted with the object's,
+    // they carried the follower off with the background; left out as moving like the
+    // background around the mask, the square is kept.
+    const PW: u32 = 220;
+    let n = 14;
+    let scenes: Vec<(Vec<u8>, Mask)> = (0..n).map(render_panning).collect();
+    let frames: Vec<Frame> = scenes
+        .iter()
+        .map(|(rgb, _)| Frame::rgb(rgb, PW, H).unwrap())
+        .collect();
+    let mut loose = vec![0u8; (PW * H) as usize];
+    for y in 40..80 {
+        for x in 80..145 {
+            loose[(y * PW + x) as usize] = 1;
+        }
+    }
+    let loose = Mask::from_full(PW, H, &loose).unwrap();
+    assert!(loose.iou(&scenes[0].1) > 0.6);
+    let on = FollowConfig {
+        background_motion: true,
+        ..FollowConfig::default()
+    };
+    let steps = follow_sequence(&frames, 0, &loose, None, &on).unwrap();
+    let ious: Vec<f64> = steps
+        .iter()
+        .zip(&scenes)
+        .map(|(s, (_, t))| s.mask.iou(t))
+        .collect();
+    let tail = &ious[n - 4..];
+    assert!(
+        tail.iter().all(|&v| v >= 0.5),
+        "the square is kept to the end: IoU per frame {ious:.2?}"
+    );
+}
