@@ -95,24 +95,20 @@ fn frame_of(img: &RgbImage) -> Result<Frame<'_>, Box<dyn std::error::Error>> {
     Ok(Frame::rgb(img.as_raw(), img.width(), img.height())?)
 }
 
-/// Non-zero in any channel is target.
+/// Non-zero in any channel is target; in a paletted PNG, an index ≠ 0 (whatever its colour).
 fn read_mask_png(path: &Path, width: u32, height: u32) -> Result<Mask, Box<dyn std::error::Error>> {
     // The frame's size is checked in the header, before the mask is decoded.
-    let img = shapetrack::io::image_file::read_image(path, Some((width, height)))
-        .map_err(|e| format!("--init {e}"))?
+    let img = shapetrack::io::image_file::read_mask_image(path, Some((width, height)))
+        .map_err(|e| format!("--init {e}"))?;
+    let (iw, ih) = img.dimensions();
+    let bits = img.object_bits(|i| {
         // 16 bits a channel: an 8-bit conversion would round ids 1…127 of a 16-bit mask to 0.
-        .to_rgb16();
-    let bits: Vec<u8> = img
-        .pixels()
-        .map(|p| u8::from(p.0.iter().any(|&v| v != 0)))
-        .collect();
-    Ok(mask_from_bitmap(
-        width,
-        height,
-        img.width(),
-        img.height(),
-        &bits,
-    )?)
+        i.to_rgb16()
+            .pixels()
+            .map(|p| u8::from(p.0.iter().any(|&v| v != 0)))
+            .collect()
+    });
+    Ok(mask_from_bitmap(width, height, iw, ih, &bits)?)
 }
 
 /// What `follow` writes.
