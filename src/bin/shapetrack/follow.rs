@@ -461,9 +461,11 @@ fn follow_run(
         stats.1 += 1;
         let r = Region::Mask(s.mask);
         // Under the reset protocol the run ends at the first frame without overlap: the
-        // supervisor re-initialises there, so following on would be wasted work.
-        let failed = supervisor
-            .is_some_and(|(gt, b)| overlap(&r, &gt[i], Some(b), OverlapMethod::Toolkit) <= 0.0);
+        // supervisor re-initialises there, so following on would be wasted work. A frame
+        // where the object is absent is no failure (`run_reset_protocol`'s rule).
+        let failed = supervisor.is_some_and(|(gt, b)| {
+            !gt[i].is_empty() && overlap(&r, &gt[i], Some(b), OverlapMethod::Toolkit) <= 0.0
+        });
         out.push(r);
         if failed {
             break;
