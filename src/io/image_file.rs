@@ -106,7 +106,7 @@ pub fn jpeg_complete(bytes: impl Iterator<Item = u8>) -> bool {
                 let (Some(hi), Some(lo)) = (b.next(), b.next()) else {
                     return false;
                 };
-                let len = (usize::from(hi) << 8 | usize::from(lo)).saturating_sub(2);
+                let len = ((usize::from(hi) << 8) | usize::from(lo)).saturating_sub(2);
                 if b.by_ref().take(len).count() < len {
                     return false;
                 }
