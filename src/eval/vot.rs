@@ -75,7 +75,7 @@ mod toolkit;
 
 pub use anchor::{
     anchor_frames, anchors_every, evaluate_anchor_sequence, run_anchor_protocol, summarize_anchor,
-    AnchorParams, AnchorRun, AnchorSequence, AnchorSummary, InitFrame,
+    AnchorParams, AnchorRun, AnchorScorer, AnchorSequence, AnchorSummary, InitFrame,
 };
 pub use reset::{
     evaluate_reset_sequence, run_reset_protocol, summarize_reset, ResetParams, ResetSequence,

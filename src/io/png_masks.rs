@@ -1,12 +1,14 @@
 //! Instance masks as one PNG per frame: 16-bit greyscale where the pixel value is the object id
 //! (0 = background), as MOTS/KITTI-style instance maps; and 8-bit greyscale either as DAVIS
 //! 2016 binary masks (0 / non-zero, one object whose id the caller gives) or as 8-bit id maps.
+//! A paletted PNG (DAVIS 2017, VOT) is read by its palette indices, as an 8-bit map.
 //!
 //! Reading gives one [`Record`] per id present in the frame, with its mask ([`Rle`]) and tight
 //! box. Writing paints the records of one frame into a 16-bit map; the format cannot express
 //! overlap, so records are painted in ascending id order and a pixel keeps the first id that
 //! claimed it. Records without a mask are painted as their box (pixel centres inside it).
 
+use super::image_file::{decode_mask_image, MaskImage};
 use super::{IoError, Record, RecordFlags, Rle};
 use crate::frame::Mask;
 use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
@@ -106,46 +108,54 @@ fn record_of(frame: u32, id: i64, rle: Rle) -> Record {
 }
 
 /// Decodes one PNG instance map held in memory. `frame` is the records' frame number and
-/// `file` names the image in errors. Only 8- and 16-bit greyscale PNGs are accepted.
+/// `file` names the image in errors. Only 8- and 16-bit greyscale PNGs and paletted PNGs (read
+/// by index, as an 8-bit map) are accepted.
 pub fn decode_png_masks(
     bytes: &[u8],
     frame: u32,
     file: &str,
     eight_bit: EightBit,
 ) -> Result<PngMaskFrame, IoError> {
-    let img = super::image_file::decode_image(bytes, Some(ImageFormat::Png), file, None).map_err(
-        |e| match e {
+    let img =
+        decode_mask_image(bytes, Some(ImageFormat::Png), file, None).map_err(|e| match e {
             IoError::Image { message, .. } => {
                 image_err(file, format!("not a readable PNG: {message}"))
             }
             other => other,
-        },
-    )?;
-    let (width, height) = (img.width(), img.height());
-    let rles = match &img {
-        DynamicImage::ImageLuma16(buf) => rles_from_ids(width, height, buf.as_raw()),
-        DynamicImage::ImageLuma8(buf) => match eight_bit {
-            EightBit::Ids => rles_from_ids(width, height, buf.as_raw()),
+        })?;
+    let (width, height) = img.dimensions();
+    // A paletted PNG's indices are read as an 8-bit map: DAVIS and VOT write index k for
+    // object k, whatever colour their palette gives it.
+    let eight: Option<&[u8]> = match &img {
+        MaskImage::Indexed(buf) => Some(buf.as_raw()),
+        MaskImage::Plain(DynamicImage::ImageLuma8(buf)) => Some(buf.as_raw()),
+        _ => None,
+    };
+    let rles = if let MaskImage::Plain(DynamicImage::ImageLuma16(buf)) = &img {
+        rles_from_ids(width, height, buf.as_raw())
+    } else if let Some(raw) = eight {
+        match eight_bit {
+            EightBit::Ids => rles_from_ids(width, height, raw),
             EightBit::Binary { .. } => {
-                let bin: Vec<u8> = buf.as_raw().iter().map(|&v| (v != 0) as u8).collect();
+                let bin: Vec<u8> = raw.iter().map(|&v| (v != 0) as u8).collect();
                 rles_from_ids(width, height, &bin)
             }
-        },
-        other => {
-            return Err(image_err(
-                file,
-                format!(
-                    "expected an 8- or 16-bit greyscale PNG, found {:?}",
-                    other.color()
-                ),
-            ))
         }
+    } else {
+        let colour = match &img {
+            MaskImage::Plain(other) => format!("{:?}", other.color()),
+            MaskImage::Indexed(_) => "a paletted image".to_string(),
+        };
+        return Err(image_err(
+            file,
+            format!("expected an 8- or 16-bit greyscale or a paletted PNG, found {colour}"),
+        ));
     };
     let records = rles
         .into_iter()
         .map(|(id, rle)| {
-            let id = match (&img, eight_bit) {
-                (DynamicImage::ImageLuma8(_), EightBit::Binary { id }) => id,
+            let id = match (eight.is_some(), eight_bit) {
+                (true, EightBit::Binary { id }) => id,
                 _ => id as i64,
             };
             record_of(frame, id, rle)

@@ -314,16 +314,25 @@ fn crosses_itself(p: &[Point]) -> bool {
 /// Parses a whole region file (one region a line; blank lines other than a trailing one are
 /// errors, since every line is a frame).
 pub fn parse_regions(text: &str, file: &str) -> Result<Vec<Region>, IoError> {
+    region_lines(text, file).collect()
+}
+
+/// The regions of a region file's text, one a line, parsed as they are taken (what
+/// [`parse_regions`] collects): a reader that scores each region and drops it holds one at a
+/// time. The masks decoded still count towards [`MAX_TOTAL_PIXELS`] over the file.
+pub fn region_lines<'a>(
+    text: &'a str,
+    file: &'a str,
+) -> impl Iterator<Item = Result<Region, IoError>> + 'a {
     let body = text.strip_suffix('\n').unwrap_or(text);
     let body = body.strip_suffix('\r').unwrap_or(body);
-    if body.is_empty() {
-        return Ok(Vec::new());
-    }
     let mut decoded = 0u64;
     body.split('\n')
+        .filter(move |_| !body.is_empty())
         .enumerate()
-        .map(|(i, l)| parse_region_counted(l.trim_end_matches('\r'), file, i + 1, &mut decoded))
-        .collect()
+        .map(move |(i, l)| {
+            parse_region_counted(l.trim_end_matches('\r'), file, i + 1, &mut decoded)
+        })
 }
 
 /// Reads a region file from disk.

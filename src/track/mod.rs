@@ -52,6 +52,7 @@ pub mod scores;
 mod search;
 pub mod sequence;
 mod timing;
+pub mod usable;
 
 pub use appearance::{ColourCost, ColourMode, ShapeContextCost, SiftCost, TrackSide};
 pub use associate::{Stage, StageCosts, StageDetections, StageTracks};

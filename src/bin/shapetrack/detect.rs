@@ -25,7 +25,7 @@ use shapetrack::detect::{
     MovingCameraDetector, MovingConfig, RefineConfig,
 };
 use shapetrack::io::limits::MAX_BOXES_PER_FRAME;
-use shapetrack::io::motchallenge::{parse_mot, write_mots};
+use shapetrack::io::motchallenge::{parse_mot_line, write_mots, MotReadOptions};
 use shapetrack::io::{image_files, read_rgb, read_text, AtomicFile, IoError, Record, Rle};
 use shapetrack::segment::{Job, Net, SegmentConfig, WholeFrame};
 use shapetrack::{Detection, Frame};
@@ -164,8 +164,10 @@ pub fn segment_settings(
         SegmentConfig::default()
     };
     let cfg = match json {
-        Some(j) => shapetrack::settings::overlay(&base, &serde_json::from_str(j)?)
-            .map_err(|e| format!("--segment: {e}"))?,
+        Some(j) => {
+            let v = serde_json::from_str(j).map_err(|e| format!("--segment: {e}"))?;
+            shapetrack::settings::overlay(&base, &v).map_err(|e| format!("--segment: {e}"))?
+        }
         None => base,
     };
     cfg.validate().map_err(|e| format!("--segment: {e}"))?;
@@ -354,39 +356,44 @@ impl Runner {
     }
 }
 
-/// Reads MOTChallenge boxes into per-frame detections (index = frame number). A frame of more
+/// Reads MOTChallenge boxes into per-frame detections (index = frame number). A box for a
+/// frame the folder does not have (beyond its `frames` frames) is an error naming its line:
+/// it would never be refined, and the output would lose it without a word. A frame of more
 /// than [`MAX_BOXES_PER_FRAME`] boxes (the tracker's cap) is an error naming the first line
 /// over it: the refiner's work per frame would follow the file's claim.
 pub fn read_boxes(path: &Path, frames: usize) -> Result<Vec<Vec<Detection>>, IoError> {
     let file = path.display().to_string();
     let text = read_text(path)?;
-    let records = parse_mot(&text, &file)?;
     let mut out = vec![Vec::new(); frames + 1];
-    for r in records {
-        if let Some(v) = out.get_mut(r.frame as usize) {
-            if v.len() == MAX_BOXES_PER_FRAME {
-                // The line of this frame's first box over the cap: records are one a line.
-                let frame = r.frame.to_string();
-                let line = text
-                    .lines()
-                    .enumerate()
-                    .filter(|(_, l)| l.split(',').next().map(str::trim) == Some(frame.as_str()))
-                    .nth(MAX_BOXES_PER_FRAME)
-                    .map_or(0, |(i, _)| i + 1);
-                return Err(IoError::Invalid {
-                    file,
-                    line,
-                    message: format!(
-                        "frame {} holds more than {MAX_BOXES_PER_FRAME} boxes, the most per \
-                         frame the tracker and the refiner take (src/io/limits.rs)",
-                        r.frame
-                    ),
-                });
-            }
-            let mut d = Detection::from_box(r.bbox, r.score);
-            d.class = r.class;
-            v.push(d);
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let Some(r) = parse_mot_line(raw, &file, line, MotReadOptions::default())? else {
+            continue;
+        };
+        let Some(v) = out.get_mut(r.frame as usize) else {
+            return Err(IoError::Invalid {
+                file,
+                line,
+                message: format!(
+                    "a box for frame {}, but the frame folder holds {frames} frames",
+                    r.frame
+                ),
+            });
+        };
+        if v.len() == MAX_BOXES_PER_FRAME {
+            return Err(IoError::Invalid {
+                file,
+                line,
+                message: format!(
+                    "frame {} holds more than {MAX_BOXES_PER_FRAME} boxes, the most per \
+                     frame the tracker and the refiner take (src/io/limits.rs)",
+                    r.frame
+                ),
+            });
         }
+        let mut d = Detection::from_box(r.bbox, r.score);
+        d.class = r.class;
+        v.push(d);
     }
     Ok(out)
 }
@@ -425,11 +432,12 @@ pub fn run(args: Args) -> crate::CliResult {
         .map(|p| read_boxes(p, files.len()))
         .transpose()?;
     let (kind, wants_model) = args.detector.plain();
-    let given_boxes = boxes.is_some();
+    // Checked whether or not a model runs: a typo in --segment must not pass unnoticed
+    // just because this run happens not to use the model.
+    let cfg = segment_settings(args.segment.as_deref(), boxes.is_some())?;
     let mut runner = Runner::new(kind, boxes)?;
     if wants_model {
         if let Some(net) = ModelChoice::from_flag(args.model.as_deref()).load("detect")? {
-            let cfg = segment_settings(args.segment.as_deref(), given_boxes)?;
             runner = runner.learned(Learned {
                 net,
                 cfg,

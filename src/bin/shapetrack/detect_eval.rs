@@ -117,9 +117,16 @@ fn name(m: Method) -> &'static str {
 /// A ground-truth mask, which must be of its frame's `size`: scored against masks of another
 /// size, every IoU would silently be measured on the wrong pixels.
 fn gt_mask(path: &Path, size: (u32, u32)) -> Result<Mask, Box<dyn std::error::Error>> {
-    let img = shapetrack::io::image_file::read_image(path, Some(size))?.to_luma8();
+    let img = shapetrack::io::image_file::read_mask_image(path, Some(size))?;
     let (w, h) = img.dimensions();
-    let bits: Vec<u8> = img.as_raw().iter().map(|&v| (v > 127) as u8).collect();
+    // Grey above half is object; in a paletted PNG, an index ≠ 0 (whatever its colour).
+    let bits = img.object_bits(|i| {
+        i.to_luma8()
+            .as_raw()
+            .iter()
+            .map(|&v| (v > 127) as u8)
+            .collect()
+    });
     Ok(Mask::from_full(w, h, &bits)?)
 }
 

@@ -1,10 +1,11 @@
 //! `shapetrack eval-vot`: VOT short-term accuracy, robustness and EAO of stored results.
 
 use shapetrack::eval::vot::{
-    anchors_every, evaluate_anchor_sequence, evaluate_reset_sequence, summarize_anchor,
-    summarize_reset, AnchorParams, OverlapMethod, ResetParams,
+    anchors_every, evaluate_reset_sequence, summarize_anchor, summarize_reset, AnchorParams,
+    AnchorScorer, OverlapMethod, ResetParams,
 };
-use shapetrack::io::vot::{parse_anchor_values, read_regions, Anchor, Region};
+use shapetrack::io::vot::{parse_anchor_values, read_regions, region_lines, Anchor, Region};
+use shapetrack::io::{read_text, IoError};
 use std::path::{Path, PathBuf};
 
 /// Evaluation protocol.
@@ -107,6 +108,47 @@ fn first_existing(c: &[PathBuf]) -> Option<PathBuf> {
     c.iter().find(|p| p.exists()).cloned()
 }
 
+/// The error for line `line` of a result file that runs past the frames it may cover.
+fn beyond(path: &Path, line: usize, what: &str, frames: usize) -> IoError {
+    IoError::Invalid {
+        file: path.display().to_string(),
+        line,
+        message: format!(
+            "more lines than frames: {what} has {frames} frames, so this line and any after \
+             it would be ignored"
+        ),
+    }
+}
+
+/// Scores the run file of anchor `a` a region at a time. A file with more regions than the
+/// run has frames is refused at its first extra line (they would be ignored).
+fn score_run(scorer: &mut AnchorScorer<'_>, a: &Anchor, path: &Path) -> crate::CliResult {
+    let len = scorer.run_length(a)?;
+    let file = path.display().to_string();
+    let text = read_text(path)?;
+    let what = format!("the run of the anchor at frame {}", a.frame);
+    let mut bad: Option<IoError> = None;
+    let regions = region_lines(&text, &file)
+        .enumerate()
+        .map_while(|(i, r)| match r {
+            Ok(_) if i >= len => {
+                bad = Some(beyond(path, i + 1, &what, len));
+                None
+            }
+            Ok(r) => Some(r),
+            Err(e) => {
+                bad = Some(e);
+                None
+            }
+        });
+    let scored = scorer.add(a, regions);
+    if let Some(e) = bad {
+        return Err(e.into());
+    }
+    scored.map_err(|e| format!("{file}: {e}"))?;
+    Ok(())
+}
+
 /// Runs the subcommand.
 pub fn run(args: Args) -> crate::CliResult {
     let (gt_file, seq_dir) = if args.gt.is_dir() {
@@ -167,7 +209,9 @@ pub fn run(args: Args) -> crate::CliResult {
                     ..AnchorParams::default()
                 }
             };
-            let mut runs = Vec::with_capacity(anchors.len());
+            // Each run file is scored as it is read and dropped: memory follows one run's
+            // text, not every anchor's masks at once.
+            let mut scorer = AnchorScorer::new(&gt, &params);
             for a in &anchors {
                 let name = format!("{seq}_{:08}.txt", a.frame);
                 let path = first_existing(&[
@@ -175,10 +219,10 @@ pub fn run(args: Args) -> crate::CliResult {
                     args.tracker.join(&seq).join(&name),
                 ])
                 .ok_or_else(|| format!("no result file {name} in {}", args.tracker.display()))?;
-                runs.push(read_regions(&path)?);
+                score_run(&mut scorer, a, &path)?;
                 read.push(path);
             }
-            let s = evaluate_anchor_sequence(&gt, &anchors, &runs, &params)?;
+            let s = scorer.finish()?;
             let sum = summarize_anchor(std::slice::from_ref(&s), &params)?;
             println!(
                 "sequence {seq}: {} frames, {} anchors, bounds {:?}, overlap {:?}",
@@ -237,6 +281,9 @@ pub fn run(args: Args) -> crate::CliResult {
                 args.tracker.clone()
             };
             let traj: Vec<Region> = read_regions(&path)?;
+            if traj.len() > gt.len() {
+                return Err(beyond(&path, gt.len() + 1, "the sequence", gt.len()).into());
+            }
             read.push(path);
             let s = evaluate_reset_sequence(&gt, &traj, &params)?;
             let sum = summarize_reset(std::slice::from_ref(&s), &params)?;

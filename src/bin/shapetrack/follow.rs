@@ -17,7 +17,7 @@ use shapetrack::follow::{
 };
 use shapetrack::frame::{Detection, Frame, Mask};
 use shapetrack::io::motchallenge::write_mots;
-use shapetrack::io::png_masks::{read_png_mask_dir, EightBit};
+use shapetrack::io::png_masks::{read_png_mask_dir, EightBit, PngMaskSequence};
 use shapetrack::io::rle::Rle;
 use shapetrack::io::vot::{parse_anchor_values, read_regions, write_regions, Direction, Region};
 use shapetrack::io::{image_files, read_rgb, write_text, Record};
@@ -95,24 +95,20 @@ fn frame_of(img: &RgbImage) -> Result<Frame<'_>, Box<dyn std::error::Error>> {
     Ok(Frame::rgb(img.as_raw(), img.width(), img.height())?)
 }
 
-/// Non-zero in any channel is target.
+/// Non-zero in any channel is target; in a paletted PNG, an index ≠ 0 (whatever its colour).
 fn read_mask_png(path: &Path, width: u32, height: u32) -> Result<Mask, Box<dyn std::error::Error>> {
     // The frame's size is checked in the header, before the mask is decoded.
-    let img = shapetrack::io::image_file::read_image(path, Some((width, height)))
-        .map_err(|e| format!("--init {e}"))?
+    let img = shapetrack::io::image_file::read_mask_image(path, Some((width, height)))
+        .map_err(|e| format!("--init {e}"))?;
+    let (iw, ih) = img.dimensions();
+    let bits = img.object_bits(|i| {
         // 16 bits a channel: an 8-bit conversion would round ids 1…127 of a 16-bit mask to 0.
-        .to_rgb16();
-    let bits: Vec<u8> = img
-        .pixels()
-        .map(|p| u8::from(p.0.iter().any(|&v| v != 0)))
-        .collect();
-    Ok(mask_from_bitmap(
-        width,
-        height,
-        img.width(),
-        img.height(),
-        &bits,
-    )?)
+        i.to_rgb16()
+            .pixels()
+            .map(|p| u8::from(p.0.iter().any(|&v| v != 0)))
+            .collect()
+    });
+    Ok(mask_from_bitmap(width, height, iw, ih, &bits)?)
 }
 
 /// What `follow` writes.
@@ -207,6 +203,12 @@ pub fn run(args: Args) -> crate::CliResult {
     let first = read_rgb(&files[init])?;
     let (w, h) = first.dimensions();
     let mask = read_mask_png(&args.init, w, h)?;
+    // Every input is read and checked before the follower runs and before --out is written:
+    // a bad --gt found only after the output was replaced would cost the user that file.
+    let truth = match &args.gt {
+        Some(gt) => Some(read_truth(gt, files.len(), w, h)?),
+        None => None,
+    };
     let frame0 = frame_of(&first)?;
     let cfg: FollowConfig = match &args.config {
         Some(j) => serde_json::from_str(j).map_err(|e| format!("--config: {e}"))?,
@@ -267,6 +269,10 @@ pub fn run(args: Args) -> crate::CliResult {
         r.mask = Some(Rle::from_mask(&s.mask, w, h));
         records.push(r);
     }
+    let j = truth
+        .as_ref()
+        .map(|t| score_j(t, &steps, args.verbose))
+        .transpose()?;
     write_text(&args.out, &write_mots(&records))?;
     let followed = files.len() - 1;
     eprintln!(
@@ -280,34 +286,40 @@ pub fn run(args: Args) -> crate::CliResult {
             ""
         }
     );
-    if let Some(gt) = &args.gt {
-        let j = score_j(gt, &steps, w, h, args.verbose)?;
+    if let Some(j) = j {
         println!("J {j:.4}");
     }
     Ok(())
 }
 
-/// Mean mask IoU over frames against a folder of ground-truth PNG masks (a frame where both
-/// are empty counts 1, as DAVIS scores it).
-fn score_j(
+/// The ground-truth masks of `--gt`, one per frame (`frames` of them, each `w × h`).
+fn read_truth(
     gt: &Path,
-    steps: &[Option<FollowStep>],
+    frames: usize,
     w: u32,
     h: u32,
-    verbose: bool,
-) -> Result<f64, Box<dyn std::error::Error>> {
+) -> Result<PngMaskSequence, Box<dyn std::error::Error>> {
     let seq = read_png_mask_dir(gt, EightBit::Binary { id: 1 })?;
-    if seq.num_frames as usize != steps.len() || (seq.width, seq.height) != (w, h) {
+    if seq.num_frames as usize != frames || (seq.width, seq.height) != (w, h) {
         return Err(format!(
-            "--gt {}: {} masks of {}x{}, expected {} of {w}x{h}",
+            "--gt {}: {} masks of {}x{}, expected {frames} of {w}x{h}",
             gt.display(),
             seq.num_frames,
             seq.width,
             seq.height,
-            steps.len()
         )
         .into());
     }
+    Ok(seq)
+}
+
+/// Mean mask IoU over frames against a folder of ground-truth PNG masks (a frame where both
+/// are empty counts 1, as DAVIS scores it).
+fn score_j(
+    seq: &PngMaskSequence,
+    steps: &[Option<FollowStep>],
+    verbose: bool,
+) -> Result<f64, Box<dyn std::error::Error>> {
     let mut sum = 0.0;
     for (i, s) in steps.iter().enumerate() {
         let truth = seq
@@ -449,9 +461,11 @@ fn follow_run(
         stats.1 += 1;
         let r = Region::Mask(s.mask);
         // Under the reset protocol the run ends at the first frame without overlap: the
-        // supervisor re-initialises there, so following on would be wasted work.
-        let failed = supervisor
-            .is_some_and(|(gt, b)| overlap(&r, &gt[i], Some(b), OverlapMethod::Toolkit) <= 0.0);
+        // supervisor re-initialises there, so following on would be wasted work. A frame
+        // where the object is absent is no failure (`run_reset_protocol`'s rule).
+        let failed = supervisor.is_some_and(|(gt, b)| {
+            !gt[i].is_empty() && overlap(&r, &gt[i], Some(b), OverlapMethod::Toolkit) <= 0.0
+        });
         out.push(r);
         if failed {
             break;
@@ -519,6 +533,7 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
             },
         )
     };
+    let mut results: Vec<(PathBuf, String)> = Vec::new();
     if matches!(args.protocol, VotProtocol::Anchor | VotProtocol::Both) {
         let af = args.seq.join("anchor.value");
         let anchors = if af.exists() {
@@ -538,7 +553,7 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
         }
         for (a, r) in anchors.iter().zip(&runs) {
             let p = args.out.join(format!("{seq}_{:08}.txt", a.frame));
-            write_text(&p, &write_regions(r))?;
+            results.push((p, write_regions(r)));
         }
     }
     if matches!(args.protocol, VotProtocol::Reset | VotProtocol::Both) {
@@ -554,10 +569,15 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
         if let Some(e) = err.borrow().as_ref() {
             return Err(e.clone().into());
         }
-        write_text(
-            &args.out.join(format!("{seq}_001.txt")),
-            &write_regions(&traj),
-        )?;
+        results.push((
+            args.out.join(format!("{seq}_001.txt")),
+            write_regions(&traj),
+        ));
+    }
+    // Written only once both protocols ran: a frame found bad by the second must not leave
+    // the first's files replaced and the second's old ones beside them.
+    for (p, text) in &results {
+        write_text(p, text)?;
     }
     let (busy, fr) = *stats.borrow();
     let peak =

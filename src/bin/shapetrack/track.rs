@@ -23,6 +23,7 @@ use shapetrack::io::{
     image_files, read_text, strip_bom, write_text, AtomicFile, IoError, PackedRle, Record, Rle,
 };
 use shapetrack::track::offline::{OfflineConfig, OfflineTracker, Phase, RleHistory};
+use shapetrack::track::usable::RunData;
 use shapetrack::track::{detections_by_frame, to_records, Config, Preset, Tracker};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -221,15 +222,23 @@ pub fn run(args: Args) -> crate::CliResult {
     }
     // Settings that make tracking impossible are refused here, naming the file they came from
     // as well as the field (the tracker's own check knows only the field).
+    // Weights that the run's data cannot feed (mask terms with boxes) are as impossible.
+    let data = RunData {
+        masks: mots,
+        images: args.frames.is_some(),
+    };
     if let Some(p) = &args.config {
         online_config
-            .validate()
+            .validate_for(data)
             .map_err(|e| format!("{}: {e}", p.display()))?;
     }
     if let Some(p) = &args.offline_config {
+        let bad = |e: &dyn std::fmt::Display| format!("{}: {e}", p.display());
+        offline_config.validate().map_err(|e| bad(&e))?;
         offline_config
-            .validate()
-            .map_err(|e| format!("{}: {e}", p.display()))?;
+            .online
+            .validate_for(data)
+            .map_err(|e| bad(&e))?;
     }
 
     let seqinfo = seqinfo_path.as_deref().map(SeqInfo::read).transpose()?;

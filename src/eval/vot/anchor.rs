@@ -134,42 +134,91 @@ pub fn evaluate_anchor_sequence(
     runs: &[Vec<Region>],
     params: &AnchorParams,
 ) -> Result<AnchorSequence, VotError> {
-    if anchors.is_empty() {
-        return Err(VotError::Empty);
-    }
     if anchors.len() != runs.len() {
+        if anchors.is_empty() {
+            return Err(VotError::Empty);
+        }
         return Err(VotError::LengthMismatch {
             what: "anchor trajectories".into(),
             expected: anchors.len(),
             got: runs.len(),
         });
     }
-    let n = gt.len();
-    let mut out = Vec::with_capacity(anchors.len());
-    let (mut progress_sum, mut acc_sum, mut total) = (0usize, 0.0, 0usize);
-    let curve_len = params.eao_high;
-    let mut eao_sum = vec![0.0; curve_len];
-    let mut eao_active = vec![0.0; curve_len];
+    let mut scorer = AnchorScorer::new(gt, params);
     for (anchor, traj) in anchors.iter().zip(runs) {
+        scorer.add(anchor, traj.iter())?;
+    }
+    scorer.finish()
+}
+
+/// [`evaluate_anchor_sequence`] a run at a time, each run's regions taken one by one and
+/// dropped once scored: memory follows one region and the per-frame overlaps, not every
+/// anchor's masks (a long sequence's anchor runs hold its length squared over 100 regions).
+#[derive(Debug, Clone)]
+pub struct AnchorScorer<'a> {
+    gt: &'a [Region],
+    params: AnchorParams,
+    runs: Vec<AnchorRun>,
+    progress_sum: usize,
+    acc_sum: f64,
+    total: usize,
+    eao_sum: Vec<f64>,
+    eao_active: Vec<f64>,
+}
+
+impl<'a> AnchorScorer<'a> {
+    /// A scorer for the runs of the sequence whose ground truth is `gt`.
+    pub fn new(gt: &'a [Region], params: &AnchorParams) -> Self {
+        Self {
+            gt,
+            params: *params,
+            runs: Vec::new(),
+            progress_sum: 0,
+            acc_sum: 0.0,
+            total: 0,
+            eao_sum: vec![0.0; params.eao_high],
+            eao_active: vec![0.0; params.eao_high],
+        }
+    }
+
+    /// The number of regions the run of `anchor` must hold (its frames, the anchor's
+    /// included), or an error when the anchor lies outside the sequence.
+    pub fn run_length(&self, anchor: &Anchor) -> Result<usize, VotError> {
+        let n = self.gt.len();
         if anchor.frame >= n {
             return Err(VotError::AnchorOutOfRange {
                 frame: anchor.frame,
                 len: n,
             });
         }
-        let frames = anchor_frames(anchor, n);
-        if traj.len() != frames.len() {
+        Ok(anchor_frames(anchor, n).len())
+    }
+
+    /// Scores the run of `anchor`, its regions in run order (the first, at the anchor, is the
+    /// initialisation and ignored). It must hold exactly [`AnchorScorer::run_length`] regions.
+    pub fn add<R: std::borrow::Borrow<Region>>(
+        &mut self,
+        anchor: &Anchor,
+        traj: impl IntoIterator<Item = R>,
+    ) -> Result<(), VotError> {
+        let (gt, params) = (self.gt, &self.params);
+        let len = self.run_length(anchor)?;
+        let frames = anchor_frames(anchor, gt.len());
+        let mut ov = Vec::with_capacity(len);
+        let mut got = 0usize;
+        for r in traj {
+            if let Some(&f) = frames.get(got) {
+                ov.push(overlap(r.borrow(), &gt[f], params.bounds, params.method));
+            }
+            got += 1;
+        }
+        if got != len {
             return Err(VotError::LengthMismatch {
                 what: format!("trajectory of the anchor at frame {}", anchor.frame),
-                expected: frames.len(),
-                got: traj.len(),
+                expected: len,
+                got,
             });
         }
-        let mut ov: Vec<f64> = frames
-            .iter()
-            .zip(traj)
-            .map(|(&f, r)| overlap(r, &gt[f], params.bounds, params.method))
-            .collect();
         ov[0] = match params.init_frame {
             InitFrame::GroundTruth => 1.0,
             InitFrame::Special => overlap(
@@ -194,25 +243,25 @@ pub fn evaluate_anchor_sequence(
         }
         let failed = progress < ov.len();
         let run_acc: f64 = ov[..progress].iter().sum();
-        progress_sum += progress;
-        acc_sum += run_acc;
-        total += ov.len();
+        self.progress_sum += progress;
+        self.acc_sum += run_acc;
+        self.total += ov.len();
         // EAO contribution (toolkit's compute_eao_partial) with post-failure overlaps zeroed.
         let mut zeroed = ov.clone();
         zeroed[progress..].fill(0.0);
         let mut prefix = 0.0;
         let tail: f64 = zeroed.iter().skip(1).sum();
-        for j in 1..curve_len {
+        for j in 1..params.eao_high {
             if j < zeroed.len() {
                 prefix += zeroed[j];
-                eao_sum[j] += prefix / j as f64;
-                eao_active[j] += 1.0;
+                self.eao_sum[j] += prefix / j as f64;
+                self.eao_active[j] += 1.0;
             } else if failed {
-                eao_sum[j] += tail / (j - 1).max(1) as f64;
-                eao_active[j] += 1.0;
+                self.eao_sum[j] += tail / (j - 1).max(1) as f64;
+                self.eao_active[j] += 1.0;
             }
         }
-        out.push(AnchorRun {
+        self.runs.push(AnchorRun {
             anchor: *anchor,
             length: ov.len(),
             progress,
@@ -224,20 +273,28 @@ pub fn evaluate_anchor_sequence(
             },
             overlaps: ov,
         });
+        Ok(())
     }
-    Ok(AnchorSequence {
-        runs: out,
-        accuracy: if progress_sum > 0 {
-            acc_sum / progress_sum as f64
-        } else {
-            0.0
-        },
-        robustness: progress_sum as f64 / total as f64,
-        accuracy_weight: progress_sum as f64,
-        robustness_weight: n as f64,
-        eao_sum,
-        eao_active,
-    })
+
+    /// The sequence's scores over the runs added (an error when none was).
+    pub fn finish(self) -> Result<AnchorSequence, VotError> {
+        if self.runs.is_empty() {
+            return Err(VotError::Empty);
+        }
+        Ok(AnchorSequence {
+            runs: self.runs,
+            accuracy: if self.progress_sum > 0 {
+                self.acc_sum / self.progress_sum as f64
+            } else {
+                0.0
+            },
+            robustness: self.progress_sum as f64 / self.total as f64,
+            accuracy_weight: self.progress_sum as f64,
+            robustness_weight: self.gt.len() as f64,
+            eao_sum: self.eao_sum,
+            eao_active: self.eao_active,
+        })
+    }
 }
 
 /// Dataset-level anchor-protocol scores.

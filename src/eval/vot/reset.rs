@@ -46,6 +46,13 @@ impl Default for ResetParams {
 /// frame and the ground truth there and returns its regions for frames `start + 1 ..` (it may
 /// stop early: missing frames count as failures). Returns the trajectory: code 1 at
 /// initialisations, code 2 at failures, code 0 for skipped frames, regions elsewhere.
+///
+/// A frame whose ground truth is empty (the object absent: VOT writes `NaN` coordinates,
+/// read as code 0) is never a failure, whatever the tracker reports there: the anchor
+/// protocol's rule ([`super::evaluate_anchor_sequence`] counts a failure only where the
+/// object is present), so that both protocols judge the same frames alike. (The toolkit's
+/// supervisor would fail a tracker that still reports the object while it is hidden; its
+/// VOT2016–2019 sequences have no such frame, so their results are unchanged.)
 pub fn run_reset_protocol<F>(gt: &[Region], params: &ResetParams, mut tracker: F) -> Vec<Region>
 where
     F: FnMut(usize, &Region) -> Vec<Region>,
@@ -64,7 +71,7 @@ where
                 overlap(r, &gt[frame], params.bounds, params.method)
             });
             match r {
-                Some(r) if o > params.failure_overlap => {
+                Some(r) if o > params.failure_overlap || gt[frame].is_empty() => {
                     traj[frame] = r.clone();
                     frame += 1;
                 }
