@@ -176,15 +176,6 @@ pub struct FollowConfig {
     /// flamingo 0.73 → 0.34 against the follower without it); below 0.5 it helps on average
     /// (0.3 never triggers: the follower's lost state already decides there).
     pub learned_below: f64,
-    /// Leave out of the fit the matches that moved as the background around the mask did
-    /// (fitted on the model frame's keypoints clear of the mask), when enough others remain.
-    /// For a camera that pans with its object, where a mask that takes in some background (a
-    /// pole the object passes) otherwise slides off with it: on the 21 DAVIS clips of
-    /// `../shared/data` without the network, scooter-gray 0.145 → 0.527 and bus 0.644 →
-    /// 0.769, but dance-jump 0.463 → 0.355 and mean 0.641 → 0.655; with the network,
-    /// flamingo 0.737 → 0.434. Leave-one-clip-out does not pick it (its gain is two clips),
-    /// so it is off by default (tests/data/follow/README.md).
-    pub background_motion: bool,
     /// The learned segmentation's crop and threshold settings.
     pub segment: SegmentConfig,
     /// RANSAC seed.
@@ -214,7 +205,6 @@ impl Default for FollowConfig {
             learned_max_growth: 1.0,
             reanchor_iou: 0.3,
             learned_below: 0.5,
-            background_motion: false,
             segment: SegmentConfig::default(),
             seed: 0x5eed_f011,
         }

@@ -68,9 +68,6 @@ pub struct FollowStep {
 struct Model {
     mask: Mask,
     feats: SiftFeatures,
-    /// Keypoints of the same frame around the mask, clear of it ([`BACKGROUND_GAP`]): what
-    /// the background did since then ([`Follower::fit`]).
-    background: SiftFeatures,
 }
 
 /// Follows one target from a mask given at one frame; feed it frames in the direction of
@@ -112,11 +109,6 @@ impl Follower {
             });
         }
         let feats = model_features(frame, &mask, &cfg)?;
-        let background = if cfg.background_motion {
-            background_features(frame, &mask, &cfg)?
-        } else {
-            SiftFeatures::default()
-        };
         let colour = ColourModel::learn(frame, &mask, &ring(&mask, &cfg), cfg.max_side);
         Ok(Follower {
             width: w,
@@ -124,7 +116,6 @@ impl Follower {
             model: Model {
                 mask: mask.clone(),
                 feats,
-                background,
             },
             colour,
             last: mask,
@@ -406,11 +397,6 @@ impl Follower {
                 self.model = Model {
                     mask: carried.clone(),
                     feats: new_feats,
-                    background: if cfg.background_motion {
-                        select_clear_of(&feats, &carried, BACKGROUND_GAP)
-                    } else {
-                        SiftFeatures::default()
-                    },
                 };
             }
             let ring = ring(&mask, cfg);
@@ -433,90 +419,46 @@ impl Follower {
 
     /// RANSAC similarity from the model's keypoints to this frame's, if enough agree and
     /// the scale change is plausible. Returns the transform and its inlier count.
-    ///
-    /// With [`FollowConfig::background_motion`], the matches that moved as the background
-    /// did are left out first, when enough others remain: a mask a few pixels off holds keypoints of the background beside or behind
-    /// the object (a pole it passes, the ground at its edge), and where the camera pans with
-    /// the object those keypoints all agree on the background's motion and outvote the
-    /// object's own. The follower then slid off with the background within a few frames
-    /// (DAVIS scooter-gray: J 0.75 at frame 10, 0.11 at frame 15, lost from frame 41). The
-    /// background's motion is fitted on the model frame's keypoints around the mask
-    /// ([`Model::background`]); where the object moves as the background does (a still
-    /// camera and object), too few matches remain and all are used, as before.
     fn fit(&self, feats: &SiftFeatures, downscale: f64) -> Option<(Transform, usize)> {
         let cfg = &self.cfg;
+        let matches = sift::match_descriptors(
+            &self.model.feats,
+            feats,
+            &MatchConfig {
+                ratio: cfg.match_ratio,
+                cross_check: false,
+            },
+        );
+        if matches.len() < cfg.min_inliers {
+            return None;
+        }
+        let pairs: Vec<(Point, Point)> = matches
+            .iter()
+            .map(|m| {
+                let a = self.model.feats.keypoints[m.query];
+                let b = feats.keypoints[m.train];
+                (
+                    Point::new(a.x as f64, a.y as f64),
+                    Point::new(b.x as f64, b.y as f64),
+                )
+            })
+            .collect();
         let rc = RansacConfig {
             threshold: cfg.ransac_threshold * downscale,
             max_iterations: 300,
             seed: cfg.seed,
             ..RansacConfig::default()
         };
-        let pairs = self.pairs(&self.model.feats, feats);
-        if pairs.len() < cfg.min_inliers {
+        let fit = ransac(TransformKind::Similarity, &pairs, &rc).ok()?;
+        let s = fit.transform.scale();
+        let steps = (self.lost_run + 1) as f64;
+        let max = cfg.max_scale_change.powf(steps.min(3.0));
+        if fit.inliers.len() < cfg.min_inliers || !(s.is_finite() && s <= max && s >= 1.0 / max) {
             return None;
         }
-        let background = if cfg.background_motion {
-            self.pairs(&self.model.background, feats)
-        } else {
-            Vec::new()
-        };
-        let moved_as_background = (background.len() >= cfg.min_inliers)
-            .then(|| ransac(TransformKind::Similarity, &background, &rc).ok())
-            .flatten()
-            .filter(|bg| bg.inliers.len() >= cfg.min_inliers);
-        let own: Vec<(Point, Point)> = match moved_as_background {
-            Some(bg) => pairs
-                .iter()
-                .copied()
-                .filter(|&(a, b)| bg.transform.apply(a).dist(b) > rc.threshold)
-                .collect(),
-            None => Vec::new(),
-        };
-        let plausible = |pairs: &[(Point, Point)]| {
-            let fit = ransac(TransformKind::Similarity, pairs, &rc).ok()?;
-            let s = fit.transform.scale();
-            let steps = (self.lost_run + 1) as f64;
-            let max = cfg.max_scale_change.powf(steps.min(3.0));
-            (fit.inliers.len() >= cfg.min_inliers && s.is_finite() && s <= max && s >= 1.0 / max)
-                .then_some((fit.transform, fit.inliers.len()))
-        };
-        if own.len() >= cfg.min_inliers {
-            if let Some(fit) = plausible(&own) {
-                return Some(fit);
-            }
-        }
-        plausible(&pairs)
-    }
-
-    /// The model's keypoints `from` matched to this frame's (Lowe's ratio), as point pairs.
-    fn pairs(&self, from: &SiftFeatures, to: &SiftFeatures) -> Vec<(Point, Point)> {
-        if from.is_empty() || to.is_empty() {
-            return Vec::new();
-        }
-        sift::match_descriptors(
-            from,
-            to,
-            &MatchConfig {
-                ratio: self.cfg.match_ratio,
-                cross_check: false,
-            },
-        )
-        .iter()
-        .map(|m| {
-            let a = from.keypoints[m.query];
-            let b = to.keypoints[m.train];
-            (
-                Point::new(a.x as f64, a.y as f64),
-                Point::new(b.x as f64, b.y as f64),
-            )
-        })
-        .collect()
+        Some((fit.transform, fit.inliers.len()))
     }
 }
-
-/// How far outside the mask, in pixels, a keypoint must lie to stand for the background
-/// ([`Model::background`]): a keypoint on the outline describes the object's edge too.
-const BACKGROUND_GAP: i32 = 4;
 
 /// The connected parts of `region` that lie mostly on `mask` (over half of their own pixels,
 /// or over a tenth of the mask's): the learned object the followed outline is on, without the
@@ -629,40 +571,6 @@ fn model_features(
         Some(mask),
         &cfg.sift(),
     )?)
-}
-
-/// The frame's SIFT features around `mask` and clear of it (the search region the first
-/// step will look in, less the mask grown by [`BACKGROUND_GAP`]).
-fn background_features(
-    frame: &Frame<'_>,
-    mask: &Mask,
-    cfg: &FollowConfig,
-) -> Result<SiftFeatures, FollowError> {
-    let b = mask.bbox();
-    let margin = cfg.search_margin * b.w.max(b.h) + 8.0;
-    let Some(region) = clip_box(&b.expanded(margin), frame.width(), frame.height()) else {
-        return Ok(SiftFeatures::default());
-    };
-    let all = sift::detect_in_region(frame, &region, None, &cfg.sift())?;
-    Ok(select_clear_of(&all, mask, BACKGROUND_GAP))
-}
-
-/// The features at least `gap` pixels (along both axes) from every pixel of `mask`.
-fn select_clear_of(feats: &SiftFeatures, mask: &Mask, gap: i32) -> SiftFeatures {
-    let mut out = SiftFeatures::default();
-    for (k, d) in feats.keypoints.iter().zip(&feats.descriptors) {
-        let (x, y) = (k.x.floor() as i32, k.y.floor() as i32);
-        let near = (-gap..=gap).step_by(gap.max(1) as usize).any(|dy| {
-            (-gap..=gap)
-                .step_by(gap.max(1) as usize)
-                .any(|dx| mask.get(x + dx, y + dy))
-        });
-        if !near {
-            out.keypoints.push(*k);
-            out.descriptors.push(*d);
-        }
-    }
-    out
 }
 
 fn select_inside(feats: &SiftFeatures, mask: &Mask) -> SiftFeatures {
