@@ -27,16 +27,9 @@ fn err(file: &str, message: impl Into<String>) -> IoError {
     }
 }
 
-/// The header's size checked, then the pixels decoded.
-fn decode_checked<R: BufRead + Seek>(
-    reader: ImageReader<R>,
-    file: &str,
-    expect: Option<(u32, u32)>,
-) -> Result<DynamicImage, IoError> {
-    let decoder = reader
-        .into_decoder()
-        .map_err(|e| err(file, e.to_string()))?;
-    let (w, h) = decoder.dimensions();
+/// A header's size `w × h` against the caps and, with `expect`, the frame's size: checked
+/// before any pixel is decoded.
+fn check_size(file: &str, w: u32, h: u32, expect: Option<(u32, u32)>) -> Result<(), IoError> {
     if !image_size_ok(u64::from(w), u64::from(h)) {
         return Err(err(
             file,
@@ -54,6 +47,20 @@ fn decode_checked<R: BufRead + Seek>(
             ));
         }
     }
+    Ok(())
+}
+
+/// The header's size checked, then the pixels decoded.
+fn decode_checked<R: BufRead + Seek>(
+    reader: ImageReader<R>,
+    file: &str,
+    expect: Option<(u32, u32)>,
+) -> Result<DynamicImage, IoError> {
+    let decoder = reader
+        .into_decoder()
+        .map_err(|e| err(file, e.to_string()))?;
+    let (w, h) = decoder.dimensions();
+    check_size(file, w, h, expect)?;
     DynamicImage::from_decoder(decoder).map_err(|e| err(file, e.to_string()))
 }
 
@@ -223,20 +230,7 @@ fn png_indices<R: BufRead + Seek>(
         return Ok(None);
     }
     let (w, h, depth) = (info.width, info.height, info.bit_depth as usize);
-    if !image_size_ok(u64::from(w), u64::from(h)) {
-        return Err(err(
-            file,
-            format!("the image says it is {w}x{h}: over the cap of {MAX_PIXELS} pixels"),
-        ));
-    }
-    if let Some((ew, eh)) = expect {
-        if (w, h) != (ew, eh) {
-            return Err(err(
-                file,
-                format!("the image is {w}x{h}, not the frame's {ew}x{eh}"),
-            ));
-        }
-    }
+    check_size(file, w, h, expect)?;
     let size = reader
         .output_buffer_size()
         .ok_or_else(|| err(file, "image too large"))?;

@@ -126,35 +126,37 @@ pub fn decode_png_masks(
     let (width, height) = img.dimensions();
     // A paletted PNG's indices are read as an 8-bit map: DAVIS and VOT write index k for
     // object k, whatever colour their palette gives it.
-    let eight: Option<&[u8]> = match &img {
-        MaskImage::Indexed(buf) => Some(buf.as_raw()),
-        MaskImage::Plain(DynamicImage::ImageLuma8(buf)) => Some(buf.as_raw()),
-        _ => None,
-    };
-    let rles = if let MaskImage::Plain(DynamicImage::ImageLuma16(buf)) = &img {
-        rles_from_ids(width, height, buf.as_raw())
-    } else if let Some(raw) = eight {
-        match eight_bit {
-            EightBit::Ids => rles_from_ids(width, height, raw),
-            EightBit::Binary { .. } => {
-                let bin: Vec<u8> = raw.iter().map(|&v| (v != 0) as u8).collect();
-                rles_from_ids(width, height, &bin)
+    let eight = matches!(
+        img,
+        MaskImage::Indexed(_) | MaskImage::Plain(DynamicImage::ImageLuma8(_))
+    );
+    let rles = match &img {
+        MaskImage::Plain(DynamicImage::ImageLuma16(buf)) => {
+            rles_from_ids(width, height, buf.as_raw())
+        }
+        MaskImage::Indexed(buf) | MaskImage::Plain(DynamicImage::ImageLuma8(buf)) => {
+            match eight_bit {
+                EightBit::Ids => rles_from_ids(width, height, buf.as_raw()),
+                EightBit::Binary { .. } => {
+                    let bin: Vec<u8> = buf.as_raw().iter().map(|&v| (v != 0) as u8).collect();
+                    rles_from_ids(width, height, &bin)
+                }
             }
         }
-    } else {
-        let colour = match &img {
-            MaskImage::Plain(other) => format!("{:?}", other.color()),
-            MaskImage::Indexed(_) => "a paletted image".to_string(),
-        };
-        return Err(image_err(
-            file,
-            format!("expected an 8- or 16-bit greyscale or a paletted PNG, found {colour}"),
-        ));
+        MaskImage::Plain(other) => {
+            return Err(image_err(
+                file,
+                format!(
+                    "expected an 8- or 16-bit greyscale or a paletted PNG, found {:?}",
+                    other.color()
+                ),
+            ))
+        }
     };
     let records = rles
         .into_iter()
         .map(|(id, rle)| {
-            let id = match (eight.is_some(), eight_bit) {
+            let id = match (eight, eight_bit) {
                 (true, EightBit::Binary { id }) => id,
                 _ => id as i64,
             };

@@ -6,7 +6,7 @@
 //! `shape_context` or `colour` scores no pair, matches nothing and ends with no track and no
 //! error. [`Config::validate_for`] refuses that, naming the geometry weights at 0.
 
-use super::config::{Config, ShapeVariant, Terms};
+use super::config::{Config, ShapeVariant};
 use super::TrackError;
 
 /// The data a run gives the pair-cost terms.
@@ -22,8 +22,10 @@ pub struct RunData {
 const GEOMETRY: &str = "terms.{iou, last_iou, giou, ioa, centre, size, mahalanobis}.weight";
 
 impl Config {
-    /// Whether some term of `terms` with a weight can score a pair given `data`.
-    fn scores_with(&self, terms: &Terms, data: RunData) -> bool {
+    /// Whether some term of the main association with a weight can score a pair given
+    /// `data`.
+    fn scores_with(&self, data: RunData) -> bool {
+        let terms = &self.terms;
         let on = |t: &super::config::TermConfig| t.weight > 0.0;
         let geometry = [
             &terms.iou,
@@ -46,7 +48,7 @@ impl Config {
     /// appearance terms need masks), or with masks but no frames only colour or SIFT weighted.
     pub fn validate_for(&self, data: RunData) -> Result<(), TrackError> {
         self.validate()?;
-        if self.scores_with(&self.terms, data) {
+        if self.scores_with(data) {
             return Ok(());
         }
         Err(TrackError::InvalidConfig {

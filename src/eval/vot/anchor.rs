@@ -184,6 +184,12 @@ impl<'a> AnchorScorer<'a> {
     /// The number of regions the run of `anchor` must hold (its frames, the anchor's
     /// included), or an error when the anchor lies outside the sequence.
     pub fn run_length(&self, anchor: &Anchor) -> Result<usize, VotError> {
+        self.run_frames(anchor).map(|f| f.len())
+    }
+
+    /// The frames of the run of `anchor`, in run order, or an error when the anchor lies
+    /// outside the sequence.
+    fn run_frames(&self, anchor: &Anchor) -> Result<Vec<usize>, VotError> {
         let n = self.gt.len();
         if anchor.frame >= n {
             return Err(VotError::AnchorOutOfRange {
@@ -191,7 +197,7 @@ impl<'a> AnchorScorer<'a> {
                 len: n,
             });
         }
-        Ok(anchor_frames(anchor, n).len())
+        Ok(anchor_frames(anchor, n))
     }
 
     /// Scores the run of `anchor`, its regions in run order (the first, at the anchor, is the
@@ -202,8 +208,8 @@ impl<'a> AnchorScorer<'a> {
         traj: impl IntoIterator<Item = R>,
     ) -> Result<(), VotError> {
         let (gt, params) = (self.gt, &self.params);
-        let len = self.run_length(anchor)?;
-        let frames = anchor_frames(anchor, gt.len());
+        let frames = self.run_frames(anchor)?;
+        let len = frames.len();
         let mut ov = Vec::with_capacity(len);
         let mut got = 0usize;
         for r in traj {
