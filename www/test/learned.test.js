@@ -7,7 +7,7 @@
 
 import { after, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { AGREE_IOU, CARRY_FRAMES, IDLE_THREADS, KEYFRAME_DUTY, KEYFRAME_EVERY, KEYFRAME_MIN_GAP, KeyframeSchedule, LearnedKeyframes, REGION_FRAMES, maskIou, shiftMask, wantedThreads } from '../src/worker/learned.js';
+import { AGREE_IOU, IDLE_THREADS, KEYFRAME_DUTY, KEYFRAME_EVERY, KEYFRAME_MIN_GAP, KeyframeSchedule, LearnedKeyframes, REGION_FRAMES, REPLACE_AGE, maskIou, shiftMask, wantedThreads } from '../src/worker/learned.js';
 
 /**
  * @typedef {{ bbox: { x: number, y: number, w: number, h: number }, mask?: any, score: number, class: number }} Det
@@ -69,9 +69,9 @@ test('a learned mask is carried shifted by its detection\'s displacement and tak
   // Keyframe 10: a detection at (20, 20, 40, 30); the net's outline of it is smaller.
   const learned = { bbox: { x: 25, y: 22, w: 30, h: 26 }, mask: full(25, 22, 30, 26), score: 0.8, class: -1 };
   lk.result = { frame: 10, arrived: -1, inputs: [{ x: 20, y: 20, w: 40, h: 30 }], learned: [learned] };
-  // Frame 30: the object has moved 10 px right, 5 down.
+  // Frame 12: the object has moved 10 px right, 5 down.
   const now = core.Detections.fromLists({ masks: [{ ...full(30, 25, 40, 30), score: 0.7, class: 3 }] });
-  const { dets, use } = lk.apply(30, now);
+  const { dets, use } = lk.apply(10 + REPLACE_AGE, now);
   assert.deepEqual(use, { used: 1, added: 0, from: 10 });
   assert.ok(now.freed, 'the detector\'s list is consumed');
   const [d] = dets.toList();
@@ -80,7 +80,7 @@ test('a learned mask is carried shifted by its detection\'s displacement and tak
   assert.equal(d.score, 0.7);
 });
 
-test('a proposed region no detection matches is added for a while; masks expire after they arrive', () => {
+test('a proposed region no detection matches is added for a while after it arrives; a detection\'s learned mask only while fresh', () => {
   const core = fakeCore();
   const lk = new LearnedKeyframes(core, 200, 100);
   after(() => lk.dispose());
@@ -94,11 +94,15 @@ test('a proposed region no detection matches is added for a while; masks expire 
   const b = lk.apply(40 + REGION_FRAMES + 1, late);
   assert.equal(b.use, null);
   assert.equal(b.dets, late, 'untouched');
-  // A detection's learned mask expires CARRY_FRAMES after arrival.
+  // A detection's learned mask replaces its mask only up to REPLACE_AGE frames after its
+  // keyframe's own frame, however late it arrived.
   lk.result = { frame: 100, arrived: -1, inputs: [{ x: 10, y: 10, w: 20, h: 20 }], learned: [det(12, 12, 16, 16)] };
-  assert.equal(lk.apply(110, core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] })).use?.used, 1);
+  assert.equal(lk.apply(100 + REPLACE_AGE, core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] })).use?.used, 1);
   const old = core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] });
-  assert.equal(lk.apply(111 + CARRY_FRAMES, old).dets, old);
+  assert.equal(lk.apply(101 + REPLACE_AGE, old).dets, old, 'stale: the detector\'s own mask stays');
+  lk.result = { frame: 200, arrived: -1, inputs: [{ x: 10, y: 10, w: 20, h: 20 }], learned: [det(12, 12, 16, 16)] };
+  const tardy = core.Detections.fromLists({ masks: [full(10, 10, 20, 20)] });
+  assert.equal(lk.apply(200 + REPLACE_AGE + 1, tardy).dets, tardy, 'first applied after its age: not taken');
 });
 
 test('a carried mask that disagrees with the detection\'s own (IoU < AGREE_IOU) is not taken', () => {

@@ -287,12 +287,17 @@ export const KEYFRAME_CROPS = 1;
 export const KEYFRAME_WHOLE_EVERY = 3;
 
 /**
- * Frames a keyframe's masks are carried after they arrive (they are then as old as the
- * keyframe took, plus this). Shifted by their detection's motion, they follow an object that
- * moves; they do not follow its changes of shape and size, which grow with time: 3 seconds at
- * 25 fps.
+ * Oldest a keyframe's learned mask may be, in frames since the keyframe's own frame, to take a
+ * detection's place. Shifted by its detection's motion, an outline follows an object that
+ * moves, not its changes of shape, and those come fast: the ground-truth mask of a DAVIS
+ * moving-camera clip, shifted so, keeps J 0.90 one frame later, 0.82 three, 0.76 five, 0.57
+ * twenty-five (bus, camel, car-roundabout, dog; 0.79 / 0.65 / 0.57 / 0.40 on bmx-trees, hike,
+ * scooter-black, soapbox), while the detector's own masks score about 0.74 there. A learned
+ * mask (J 0.83 from its box) is worth taking only a frame or two after its keyframe: with a
+ * fast net (WebGPU), not on a 2-core machine's wasm, where a keyframe takes seconds and its
+ * carried masks lowered the tracker's J on every clip (0.736 → 0.714, bench-learned-fps).
  */
-export const CARRY_FRAMES = 75;
+export const REPLACE_AGE = 2;
 
 /**
  * Frames a learned region no detection gave (an object standing still) is added at most,
@@ -409,10 +414,11 @@ const centre = (b) => [b.x + b.w / 2, b.y + b.h / 2];
  *    from (box IoU ≥ `MATCH_IOU`; a region the whole frame proposed stands for itself), that
  *    box to this frame's detections (the same), and shifted by the displacement of their
  *    boxes' centres; it then takes the place of the matched detection's mask if the two
- *    masks agree (IoU ≥ `AGREE_IOU`: a stale or mismatched outline is not taken). A proposed
- *    region no detection of this frame matches is added where it was (an object standing
- *    still), for `REGION_FRAMES` at most, unless a detection covers it. For `CARRY_FRAMES` at
- *    most after they arrive, or until the next keyframe's masks do.
+ *    masks agree (IoU ≥ `AGREE_IOU`: a mismatched outline is not taken), and only up to
+ *    `REPLACE_AGE` frames after the keyframe's own frame (an older outline has lost the
+ *    object's shape). A proposed region no detection of this frame matches is added where it
+ *    was (an object standing still), for `REGION_FRAMES` at most after it arrives, unless a
+ *    detection covers it; until the next keyframe's masks arrive.
  *
  * If the net cannot load (offline before its first use) or fails, the stage stops for the
  * session (`state().failed` says why) and the detector's masks go through unchanged.
@@ -518,7 +524,8 @@ export class LearnedKeyframes {
     const r = this.result;
     if (!r || frame < r.frame || r.learned.length === 0) return { dets, use: null };
     if (r.arrived < 0) r.arrived = frame;
-    if (frame - r.arrived > CARRY_FRAMES) return { dets, use: null };
+    const replace = frame - r.frame <= REPLACE_AGE;
+    if (!replace && frame - r.arrived > REGION_FRAMES) return { dets, use: null };
     const list = dets.toList();
     /** @type {Array<{ mask: MaskBitmap, iou: number } | null>} the learned mask each detection takes */
     const take = list.map(() => null);
@@ -541,6 +548,7 @@ export class LearnedKeyframes {
         const v = boxIou(kb, d.bbox);
         if (v >= bj) [j, bj] = [i, v];
       });
+      if (j >= 0 && !replace) continue;
       if (j < 0) {
         // Not detected now: a region is added for a while (an object standing still); a
         // detection's object has gone, nothing to correct.
