@@ -515,16 +515,17 @@ fn follow_learned(n: usize, cfg: &FollowConfig, shown: impl Fn(&Mask) -> Mask) -
 fn the_learned_outline_is_taken_where_it_agrees_and_only_while_the_follower_is_unsure() {
     let always = FollowConfig {
         learned_below: 1.0,
+        learned_box_slack: None,
+        learned_carry_iou: 0.0,
         ..FollowConfig::default()
     };
     // Consulted on every frame, a map of the object itself is taken and holds the object.
     let got = follow_learned(10, &always, Mask::clone);
     assert!(got.iter().all(|&(iou, l)| l && iou > 0.95), "{got:.3?}");
     // The net is consulted only while the follower's confidence is below `learned_below`
-    // (by default 0.5; this small textured target has few keypoints, so its confidence is
-    // low and the map is taken); at 0 never, and the follower's own outline stands.
+    // (by default 1: on every frame); at 0 never, and the follower's own outline stands.
     let got = follow_learned(10, &FollowConfig::default(), Mask::clone);
-    assert!(got.iter().all(|&(iou, _)| iou > 0.95), "{got:.3?}");
+    assert!(got.iter().all(|&(iou, l)| l && iou > 0.95), "{got:.3?}");
     let never = FollowConfig {
         learned_below: 0.0,
         ..FollowConfig::default()
@@ -549,33 +550,104 @@ fn the_learned_outline_is_taken_where_it_agrees_and_only_while_the_follower_is_u
 #[test]
 fn a_learned_outline_that_takes_in_a_neighbour_is_refused_past_the_growth_bound() {
     // The network outlines the object and a neighbour touching it as one salient region (a
-    // horse and its rider, a flock): half the object's box more, on its right.
-    let with_neighbour = |t: &Mask| {
-        let b = t.bbox();
-        let n = Mask::from_bbox(&BBox {
-            x: b.x + b.w - 1.0,
-            w: b.w * 0.5,
-            ..b
-        });
-        let bits: Vec<u8> = (0..H as i32)
-            .flat_map(|y| (0..W as i32).map(move |x| (x, y)))
-            .map(|(x, y)| u8::from(t.get(x, y) || n.get(x, y)))
-            .collect();
-        Mask::from_full(W, H, &bits).unwrap()
-    };
+    // horse and its rider, a flock).
     let bounded = FollowConfig {
         learned_below: 1.0,
+        learned_box_slack: None,
+        learned_carry_iou: 0.0,
         learned_max_growth: 0.2,
         ..FollowConfig::default()
     };
     let got = follow_learned(10, &bounded, with_neighbour);
     assert!(got.iter().all(|&(iou, l)| !l && iou > 0.8), "{got:.3?}");
-    // Without the bound (the default: only `learned_iou` limits growth) it is taken and the
+    // Without the bound (its default: only `learned_iou` limits growth) it is taken and the
     // followed outline grows onto the neighbour.
     let unbounded = FollowConfig {
-        learned_below: 1.0,
-        ..FollowConfig::default()
+        learned_max_growth: 1.0,
+        ..bounded
     };
     let got = follow_learned(10, &unbounded, with_neighbour);
     assert!(got.iter().any(|&(iou, l)| l && iou < 0.8), "{got:.3?}");
+}
+
+/// The network's outline of the object with a neighbour touching it on the right (half the
+/// object's box more), as one salient region.
+fn with_neighbour(t: &Mask) -> Mask {
+    let b = t.bbox();
+    let n = Mask::from_bbox(&BBox {
+        x: b.x + b.w - 1.0,
+        w: b.w * 0.5,
+        ..b
+    });
+    let bits: Vec<u8> = (0..H as i32)
+        .flat_map(|y| (0..W as i32).map(move |x| (x, y)))
+        .map(|(x, y)| u8::from(t.get(x, y) || n.get(x, y)))
+        .collect();
+    Mask::from_full(W, H, &bits).unwrap()
+}
+
+#[test]
+fn a_learned_map_cut_to_the_followed_box_keeps_a_touching_neighbour_out() {
+    // Cut to the follower's own box (+5 %) and not carried, the map's outline is taken on
+    // every frame and the neighbour stays out: only the slack's strip of it is ever shown.
+    let cut = FollowConfig {
+        learned_below: 1.0,
+        learned_box_slack: Some(0.05),
+        learned_carry_iou: 1.0,
+        ..FollowConfig::default()
+    };
+    let got = follow_learned(10, &cut, with_neighbour);
+    assert!(got.iter().all(|&(iou, l)| l && iou > 0.88), "{got:.3?}");
+    // Carried, the strip becomes the next frame's estimate and its box grows into the
+    // neighbour a strip at a time.
+    let carried = FollowConfig {
+        learned_carry_iou: 0.0,
+        ..cut.clone()
+    };
+    let got = follow_learned(10, &carried, with_neighbour);
+    let last = got.last().unwrap().0;
+    assert!(last < 0.8, "{got:.3?}");
+    // Cut to the whole crop around the prediction (no box slack), as much of the neighbour as
+    // the crop shows is taken on every frame, even without carrying it.
+    let crop = FollowConfig {
+        learned_box_slack: None,
+        ..cut
+    };
+    let got = follow_learned(10, &crop, with_neighbour);
+    assert!(got.iter().all(|&(iou, _)| iou < 0.86), "{got:.3?}");
+    assert!(got.last().unwrap().0 < 0.75, "{got:.3?}");
+}
+
+#[test]
+fn learned_cut_and_carry_settings_are_checked() {
+    let frame_rgb = render(0);
+    let frame = Frame::rgb(&frame_rgb.0, W, H).unwrap();
+    for (cfg, field) in [
+        (
+            FollowConfig {
+                learned_box_slack: Some(-0.1),
+                ..FollowConfig::default()
+            },
+            "learned_box_slack",
+        ),
+        (
+            FollowConfig {
+                learned_box_slack: Some(f64::NAN),
+                ..FollowConfig::default()
+            },
+            "learned_box_slack",
+        ),
+        (
+            FollowConfig {
+                learned_carry_iou: 1.5,
+                ..FollowConfig::default()
+            },
+            "learned_carry_iou",
+        ),
+    ] {
+        match Follower::new(&frame, &frame_rgb.1, cfg) {
+            Err(FollowError::InvalidConfig { field: f, .. }) => assert_eq!(f, field),
+            other => panic!("{field}: {other:?}"),
+        }
+    }
 }

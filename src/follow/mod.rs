@@ -309,6 +309,9 @@ impl Follower {
         // The learned outline wins where it agrees with the followed one; where the follower
         // has lost its object, it re-anchors on a learned region near the prediction.
         let mut from_learned = false;
+        // The follower's own estimate, kept for its state when a learned outline only shapes
+        // the output (`learned_carry_iou`).
+        let mut own_estimate: Option<(Mask, f64)> = None;
         if let Some(sal) =
             learned.filter(|_| cfg.learned_below >= 1.0 || confidence < cfg.learned_below)
         {
@@ -316,11 +319,14 @@ impl Follower {
                 self.velocity.x.round() as i32,
                 self.velocity.y.round() as i32,
             );
-            if let Some(region) = sal.mask(
-                &sal.crop().bbox(),
-                cfg.segment.threshold,
-                cfg.segment.keep_fraction,
-            ) {
+            let cut = match cfg.learned_box_slack {
+                Some(s) if !mask.is_empty() => {
+                    let b = mask.bbox();
+                    b.expanded(s * b.w.max(b.h))
+                }
+                _ => sal.crop().bbox(),
+            };
+            if let Some(region) = sal.mask(&cut, cfg.segment.threshold, cfg.segment.keep_fraction) {
                 let own = agreeing_parts(&region, &mask);
                 let iou = own.iou(&mask);
                 let trusted = !mask.is_empty() && confidence >= cfg.lost_confidence;
@@ -332,6 +338,9 @@ impl Follower {
                     && kept >= 1.0 - cfg.learned_max_shrink
                     && added <= cfg.learned_max_growth
                 {
+                    if iou < cfg.learned_carry_iou {
+                        own_estimate = Some((mask.clone(), confidence));
+                    }
                     mask = own;
                     confidence = confidence.max(iou);
                     from_learned = true;
@@ -368,9 +377,19 @@ impl Follower {
             }
         }
 
+        // The output; the follower's state below goes on from its own estimate when a learned
+        // outline is not carried.
+        let output = mask;
+        let (mask, from_learned_state) = match own_estimate {
+            Some((own, c)) if !from_detection => {
+                confidence = c;
+                (own, false)
+            }
+            _ => (output.clone(), from_learned),
+        };
         // What the next frame warps: the colour-refined outline only when configured, since
         // refinement errors compound when fed back (see `carry_refined`).
-        let carried = if from_detection || from_learned || cfg.carry_refined {
+        let carried = if from_detection || from_learned_state || cfg.carry_refined {
             mask.clone()
         } else {
             warped
@@ -407,7 +426,7 @@ impl Follower {
             self.last = carried;
         }
         Ok(FollowStep {
-            mask: if self.stopped { Mask::empty() } else { mask },
+            mask: if self.stopped { Mask::empty() } else { output },
             confidence,
             lost,
             stopped: self.stopped,
