@@ -12,7 +12,7 @@
 import { spawnSync } from 'node:child_process';
 import { readFileSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
-import { ROOT, setup } from './setup.mjs';
+import { PYTHON, ROOT, setup } from './setup.mjs';
 import { buildWasm } from './build-wasm.mjs';
 
 const only = process.argv.find((a) => a.startsWith('--only='))?.slice('--only='.length);
@@ -42,9 +42,11 @@ function wasmTests() {
 
 /** @type {Step[]} */
 const steps = [
-  { name: 'setup', run: () => setup({ e2e: true }) },
+  { name: 'setup', run: () => setup({ e2e: true, python: true }) },
   { name: 'cargo fmt', needs: ['setup'], run: () => sh('cargo', ['fmt', '--all', '--check']) },
-  { name: 'cargo clippy', needs: ['setup'], run: () => sh('cargo', ['clippy', '--all-targets', '--', '-D', 'warnings']) },
+  // --workspace: the Python bindings crate (python/) too; the wasm32 run below stays on the
+  // core (default-members), which is all wasm-pack builds.
+  { name: 'cargo clippy', needs: ['setup'], run: () => sh('cargo', ['clippy', '--workspace', '--all-targets', '--', '-D', 'warnings']) },
   {
     // src/wasm/ only exists for wasm32, so the native clippy run never sees it. Every target
     // `wasm-pack test --node` builds (lib, CLI, all tests, examples; benches use criterion,
@@ -73,6 +75,21 @@ const steps = [
     name: 'fuzz parsers',
     needs: ['setup'],
     run: () => sh('cargo', ['test', '--test', 'fuzz_parsers'], { FUZZ_ITERS: '100000' }),
+  },
+  {
+    // The Python package (python/, issue 67): built and installed into the venv setup made,
+    // then its tests, which compare it with the CLI bit for bit (the release CLI, built here
+    // first: the package's build then reuses the core's compiled dependencies, same profile
+    // and target/) and run the Ray batch locally.
+    name: 'python package',
+    needs: ['setup'],
+    run: () => {
+      sh('cargo', ['build', '--release', '--bin', 'shapetrack']);
+      sh(PYTHON, ['-m', 'pip', 'install', '--quiet', '--disable-pip-version-check', '--no-build-isolation', './python']);
+      sh(PYTHON, ['-m', 'pytest', '-q', '-p', 'no:cacheprovider', 'python/tests'], {
+        SHAPETRACK_CLI: join(ROOT, 'target', 'release', 'shapetrack'),
+      });
+    },
   },
   { name: 'build wasm', needs: ['setup'], run: () => buildWasm() },
   {
