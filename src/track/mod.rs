@@ -22,7 +22,7 @@
 //!   merged; `timing`: [`PhaseTimes`].
 //! - [`online`]: [`Tracker`], whose `update` runs the phases in turn.
 //! - [`sequence`]: whole-sequence helpers (records in, records out).
-//! - `from_files` (native only): a whole sequence from its files to a results file, what
+//! - [`from_files`]: a whole sequence from its files to a results file, what
 //!   `shapetrack track` and the Python package's batch runs both call.
 //! - [`offline`]: the offline mode: Kalman trajectory re-linker and gap filling (thesis ch. 5).
 //!
@@ -43,8 +43,8 @@ mod describe;
 mod estimate;
 pub mod features;
 mod fragments;
-// Files on disk: the CLI and the Python package, never the browser.
-#[cfg(not(target_arch = "wasm32"))]
+// Files on disk: the CLI and the Python package. It compiles for wasm32 too (the CLI does, for
+// `wasm-pack test`); the browser module never calls it, so none of it is linked there.
 pub mod from_files;
 pub mod hindsight;
 mod lifecycle;
