@@ -47,7 +47,7 @@ pub(crate) fn scalabel_detections(
     text: &str,
     file: &str,
     video: Option<&str>,
-) -> Result<(String, Vec<Record>, Categories), Box<dyn std::error::Error>> {
+) -> Result<(String, Vec<Record>, Categories), super::RunError> {
     let mut videos = split_videos(parse_scalabel(text, file)?);
     let name = match video {
         Some(v) => v.to_string(),
