@@ -11,7 +11,7 @@
 
 import { spawnSync } from 'node:child_process';
 import { readFileSync, readdirSync } from 'node:fs';
-import { join } from 'node:path';
+import { dirname, join } from 'node:path';
 import { PYTHON, ROOT, setup } from './setup.mjs';
 import { buildWasm } from './build-wasm.mjs';
 
@@ -85,7 +85,9 @@ const steps = [
     needs: ['setup'],
     run: () => {
       sh('cargo', ['build', '--release', '--bin', 'shapetrack']);
-      sh(PYTHON, ['-m', 'pip', 'install', '--quiet', '--disable-pip-version-check', '--no-build-isolation', './python']);
+      // The venv's bin/ first: the build backend runs the `maturin` executable by name.
+      const PATH = `${dirname(PYTHON)}:${process.env.PATH}`;
+      sh(PYTHON, ['-m', 'pip', 'install', '--quiet', '--disable-pip-version-check', '--no-build-isolation', './python'], { PATH });
       sh(PYTHON, ['-m', 'pytest', '-q', '-p', 'no:cacheprovider', 'python/tests'], {
         SHAPETRACK_CLI: join(ROOT, 'target', 'release', 'shapetrack'),
       });

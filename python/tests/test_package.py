@@ -70,28 +70,28 @@ def walker(n=6):
 def test_tracker_keeps_one_identity_per_walker():
     t = shapetrack.Tracker({"preset": "default"})
     seen = []
-    for boxes, scores in walker():
+    for boxes, scores in walker(12):
         tr = t.update(boxes, scores, classes=np.arange(len(boxes)))
         assert tr.xywh.shape == (len(tr), 4) and tr.mask is None
         seen.append(tr)
     last = seen[-1]
     assert sorted(last.tracker_id.tolist()) == [1, 2]
     assert set(last.class_id.tolist()) == {0, 1}
-    assert t.frame == 6
+    assert t.frame == 12
 
 
 def test_masks_and_frame_give_masks_back():
     h, w = 120, 160
     t = shapetrack.Tracker({"preset": "masks"})
     frame = np.zeros((h, w, 3), np.uint8)
-    for k in range(5):
+    for k in range(10):
         m = np.zeros((1, h, w), bool)
         m[0, 30:70, 20 + 3 * k : 50 + 3 * k] = True
         frame[:] = 40
         frame[m[0]] = (200, 30, 30)
         tr = t.update(np.array([[20.0 + 3 * k, 30, 30, 40]]), np.array([0.99]), masks=m, frame=frame)
     assert tr.mask is not None and tr.mask.shape == (len(tr), h, w)
-    assert tr.mask[tr.frame == 5].sum() > 0
+    assert tr.mask[tr.frame == 10].sum() > 0
 
 
 @pytest.mark.parametrize(
@@ -175,7 +175,7 @@ def test_supervision_adapter_sets_tracker_ids():
     sv = pytest.importorskip("supervision")
     t = shapetrack.Tracker()
     ids = []
-    for boxes, scores in walker(8):
+    for boxes, scores in walker(12):
         xyxy = np.concatenate([boxes[:, :2], boxes[:, :2] + boxes[:, 2:]], axis=1)
         det = sv.Detections(xyxy=xyxy, confidence=scores, class_id=np.zeros(len(boxes), int))
         out = t.update_with_detections(det)
