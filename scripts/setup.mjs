@@ -5,9 +5,11 @@
 //
 //   node scripts/setup.mjs          npm deps, the wasm32 target, wasm-bindgen-cli
 //   node scripts/setup.mjs --e2e    also Debian's chromium for the Playwright suite
+//   node scripts/setup.mjs --python also the Python venv of the package's tests (PYVENV)
 
 import { execFileSync, spawnSync } from 'node:child_process';
 import { existsSync, statSync } from 'node:fs';
+import { homedir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -70,17 +72,35 @@ function chromium() {
   apt(['install', '-y', 'chromium']);
 }
 
-export function setup({ e2e = false } = {}) {
+// The Python package's tests (python/, issue 67) run in a venv outside the clone, so no
+// install ever touches the system Python and a fresh clone reuses it. Its packages are what
+// the tests import: maturin builds the extension (`pip install --no-build-isolation`, so no
+// download at build time), numpy and supervision for the API, ray and fsspec for the batch
+// runs, tqdm for their progress bar, pytest to run them.
+export const PYVENV = process.env.SHAPETRACK_PYVENV ?? join(homedir(), '.cache', 'shapetrack', 'pyvenv');
+export const PYTHON = join(PYVENV, 'bin', 'python');
+const PY_PACKAGES = ['maturin>=1.5,<2', 'numpy', 'supervision', 'ray', 'fsspec', 'tqdm', 'pytest'];
+
+export function pythonEnv() {
+  if (!existsSync(PYTHON)) run('python3', ['-m', 'venv', PYVENV]);
+  // One import of everything (plus maturin's version) says whether the venv is complete.
+  const probe = 'import numpy, supervision, ray, fsspec, tqdm, pytest, maturin';
+  if (output(PYTHON, ['-c', probe]) !== null) return;
+  run(PYTHON, ['-m', 'pip', 'install', '--quiet', '--disable-pip-version-check', ...PY_PACKAGES]);
+}
+
+export function setup({ e2e = false, python = false } = {}) {
   npmDeps();
   wasmTarget();
   rustComponents();
   wasmBindgen();
   if (e2e) chromium();
+  if (python) pythonEnv();
 }
 
 if (process.argv[1] === fileURLToPath(import.meta.url)) {
   try {
-    setup({ e2e: process.argv.includes('--e2e') });
+    setup({ e2e: process.argv.includes('--e2e'), python: process.argv.includes('--python') });
   } catch (e) {
     console.error(`setup failed: ${e instanceof Error ? e.message : e}`);
     process.exit(1);

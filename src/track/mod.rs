@@ -22,6 +22,8 @@
 //!   merged; `timing`: [`PhaseTimes`].
 //! - [`online`]: [`Tracker`], whose `update` runs the phases in turn.
 //! - [`sequence`]: whole-sequence helpers (records in, records out).
+//! - [`from_files`]: a whole sequence from its files to a results file, what
+//!   `shapetrack track` and the Python package's batch runs both call.
 //! - [`offline`]: the offline mode: Kalman trajectory re-linker and gap filling (thesis ch. 5).
 //!
 //! A track's lifecycle: **tentative** (born from an unmatched confident detection) →
@@ -41,6 +43,9 @@ mod describe;
 mod estimate;
 pub mod features;
 mod fragments;
+// Files on disk: the CLI and the Python package. It compiles for wasm32 too (the CLI does, for
+// `wasm-pack test`); the browser module never calls it, so none of it is linked there.
+pub mod from_files;
 pub mod hindsight;
 mod lifecycle;
 pub mod offline;

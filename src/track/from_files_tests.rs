@@ -1,4 +1,4 @@
-//! Unit tests of the CLI's `track` command.
+//! Unit tests of the sequence runner (`shapetrack track`).
 
 use super::*;
 

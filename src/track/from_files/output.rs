@@ -1,18 +1,18 @@
 //! Where the tracked shapes of `shapetrack track` go: streamed to MOT/MOTS text frame by
 //! frame, or collected and written whole (COCO-video, CVAT), and the counts of what went.
 
-use shapetrack::frame::{Mask, TrackedShape};
-use shapetrack::io::coco_video::{write_coco_video, Category, VideoInfo};
-use shapetrack::io::cvat::{write_cvat, CvatMeta};
-use shapetrack::io::motchallenge::{write_mot, write_mots};
-use shapetrack::io::{AtomicFile, IoError, Record};
-use shapetrack::track::to_records;
+use crate::frame::{Mask, TrackedShape};
+use crate::io::coco_video::{write_coco_video, Category, VideoInfo};
+use crate::io::cvat::{write_cvat, CvatMeta};
+use crate::io::motchallenge::{write_mot, write_mots};
+use crate::io::{AtomicFile, IoError, Record};
+use crate::track::to_records;
 use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Where tracked shapes go: straight to the output file, frame by frame (online MOT/MOTS), or
 /// collected for formats written as a whole and for the offline pass.
-pub(super) enum Sink {
+pub(crate) enum Sink {
     Stream {
         out: AtomicFile,
         /// Shapes of frames not yet written (confirmation reports a few earlier frames late).
@@ -28,18 +28,18 @@ pub(super) enum Sink {
 const REORDER_FRAMES: u32 = 256;
 
 /// Shapes of an offline result written at a time (their masks unpacked together).
-pub(super) const WRITE_CHUNK: usize = 4096;
+pub(crate) const WRITE_CHUNK: usize = 4096;
 
 /// Counts of what was reported.
 #[derive(Default)]
-pub(super) struct Tally {
-    pub(super) shapes: usize,
-    pub(super) interpolated: usize,
-    pub(super) ids: std::collections::HashSet<u64>,
+pub(crate) struct Tally {
+    pub(crate) shapes: usize,
+    pub(crate) interpolated: usize,
+    pub(crate) ids: std::collections::HashSet<u64>,
 }
 
 impl Tally {
-    pub(super) fn add(&mut self, shapes: &[TrackedShape]) {
+    pub(crate) fn add(&mut self, shapes: &[TrackedShape]) {
         self.shapes += shapes.len();
         self.interpolated += shapes.iter().filter(|s| s.interpolated).count();
         self.ids.extend(shapes.iter().map(|s| s.id));
@@ -47,7 +47,7 @@ impl Tally {
 }
 
 impl Sink {
-    pub(super) fn push(&mut self, shapes: Vec<TrackedShape>, ctx: &OutCtx) -> Result<(), IoError> {
+    pub(crate) fn push(&mut self, shapes: Vec<TrackedShape>, ctx: &OutCtx) -> Result<(), IoError> {
         match self {
             Sink::Collect(v) => v.extend(shapes),
             Sink::Stream { pending, .. } => {
@@ -61,7 +61,7 @@ impl Sink {
     }
 
     /// Writes the held frames before tracker frame `frame`.
-    pub(super) fn flush_before(&mut self, frame: u32, ctx: &OutCtx) -> Result<(), IoError> {
+    pub(crate) fn flush_before(&mut self, frame: u32, ctx: &OutCtx) -> Result<(), IoError> {
         use std::io::Write as _;
         let Sink::Stream { out, pending, mots } = self else {
             return Ok(());
@@ -91,19 +91,19 @@ impl Sink {
 }
 
 /// MOTS has no box-only form: boxes are the degenerate case of masks, written filled.
-pub(super) fn boxes_as_masks(shapes: &mut [TrackedShape]) {
+pub(crate) fn boxes_as_masks(shapes: &mut [TrackedShape]) {
     for s in shapes.iter_mut().filter(|s| s.mask.is_none()) {
         s.mask = Some(Mask::from_bbox(&s.bbox));
     }
 }
 
 /// What the sink needs to turn shapes into lines.
-pub(super) struct OutCtx<'a> {
-    pub(super) out: &'a Path,
-    pub(super) first_frame: u32,
-    pub(super) image_size: Option<(u32, u32)>,
+pub(crate) struct OutCtx<'a> {
+    pub(crate) out: &'a Path,
+    pub(crate) first_frame: u32,
+    pub(crate) image_size: Option<(u32, u32)>,
     /// The tracker's current frame.
-    pub(super) now: u32,
+    pub(crate) now: u32,
 }
 
 /// A label name per class present (`object` for the unknown class -1).
@@ -121,7 +121,7 @@ fn class_names(records: &[Record]) -> BTreeMap<i32, String> {
         .collect()
 }
 
-pub(super) fn task_name(det: &Path) -> String {
+pub(crate) fn task_name(det: &Path) -> String {
     det.parent()
         .and_then(Path::parent)
         .and_then(Path::file_name)
@@ -131,7 +131,7 @@ pub(super) fn task_name(det: &Path) -> String {
 }
 
 /// COCO-video (ground-truth form, so every track keeps its id) of one video.
-pub(super) fn coco(
+pub(crate) fn coco(
     records: &[Record],
     num_frames: u32,
     image_size: Option<(u32, u32)>,
@@ -152,7 +152,7 @@ pub(super) fn coco(
 }
 
 /// CVAT for video 1.1 XML of one task.
-pub(super) fn cvat(
+pub(crate) fn cvat(
     records: &[Record],
     num_frames: u32,
     image_size: Option<(u32, u32)>,

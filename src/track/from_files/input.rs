@@ -1,10 +1,10 @@
 //! The detection file of `shapetrack track`: MOT, MOTS or Scalabel told apart by content, a
 //! text file checked in a first pass, then read one frame's records at a time.
 
-use shapetrack::io::limits::image_size_ok;
-use shapetrack::io::motchallenge::{parse_mot_line, parse_mots_line, MotReadOptions};
-use shapetrack::io::scalabel::{self, parse_scalabel, split_videos, Categories};
-use shapetrack::io::{strip_bom, IoError, Record, Rle};
+use crate::io::limits::image_size_ok;
+use crate::io::motchallenge::{parse_mot_line, parse_mots_line, MotReadOptions};
+use crate::io::scalabel::{self, parse_scalabel, split_videos, Categories};
+use crate::io::{strip_bom, IoError, Record, Rle};
 use std::path::{Path, PathBuf};
 
 /// Whether a detection file is MOTS, from its first non-blank line: six whitespace-separated
@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 /// fifth. A small mask's RLE may be all digits (`538` is a 4×4 mask's runs 5, 3, 8), so a
 /// sixth field that reads as a number is decoded rather than taken for a box height: a MOT
 /// box line's height almost never decodes to runs covering exactly its "height × width".
-pub(super) fn is_mots(text: &str) -> bool {
+pub(crate) fn is_mots(text: &str) -> bool {
     let Some(line) = text
         .lines()
         .map(|l| strip_bom(l).trim())
@@ -37,17 +37,17 @@ pub(super) fn is_mots(text: &str) -> bool {
 
 /// Whether a detection file is JSON (Scalabel): its first non-blank character (after a
 /// byte-order mark) opens a list or an object.
-pub(super) fn is_json(text: &str) -> bool {
+pub(crate) fn is_json(text: &str) -> bool {
     matches!(strip_bom(text).trim_start().chars().next(), Some('[' | '{'))
 }
 
 /// The detections of one video of a Scalabel file (`video`, or the file's only one), its name
 /// and the category table its classes refer to.
-pub(super) fn scalabel_detections(
+pub(crate) fn scalabel_detections(
     text: &str,
     file: &str,
     video: Option<&str>,
-) -> Result<(String, Vec<Record>, Categories), Box<dyn std::error::Error>> {
+) -> Result<(String, Vec<Record>, Categories), super::RunError> {
     let mut videos = split_videos(parse_scalabel(text, file)?);
     let name = match video {
         Some(v) => v.to_string(),
@@ -75,18 +75,18 @@ pub(super) fn scalabel_detections(
 }
 
 /// What a first pass over a MOT/MOTS text file found, without keeping its records.
-pub(super) struct Scan {
+pub(crate) struct Scan {
     /// Whether frame numbers never decrease from line to line (then the tracker reads the
     /// file again line by line while it runs, and memory stays flat over any length).
-    pub(super) sorted: bool,
-    pub(super) records: usize,
-    pub(super) first_frame: Option<u32>,
-    pub(super) last_frame: u32,
+    pub(crate) sorted: bool,
+    pub(crate) records: usize,
+    pub(crate) first_frame: Option<u32>,
+    pub(crate) last_frame: u32,
     /// The image size of the first mask (MOTS).
-    pub(super) mask_size: Option<(u32, u32)>,
+    pub(crate) mask_size: Option<(u32, u32)>,
 }
 
-pub(super) fn open_lines(path: &Path) -> Result<Lines, IoError> {
+pub(crate) fn open_lines(path: &Path) -> Result<Lines, IoError> {
     let f = std::fs::File::open(path).map_err(|source| IoError::Io {
         file: path.display().to_string(),
         source,
@@ -113,7 +113,7 @@ impl Iterator for Lines {
 
     fn next(&mut self) -> Option<Self::Item> {
         use std::io::{BufRead as _, Read as _};
-        let cap = shapetrack::io::limits::MAX_LINE_BYTES;
+        let cap = crate::io::limits::MAX_LINE_BYTES;
         let bad = |msg: String| std::io::Error::new(std::io::ErrorKind::InvalidData, msg);
         self.buf.clear();
         match (&mut self.reader)
@@ -153,7 +153,7 @@ impl Iterator for Lines {
 }
 
 /// Reads line `ln` of a text detection file (I/O errors name the file).
-pub(super) fn line_of(
+pub(crate) fn line_of(
     line: Option<std::io::Result<String>>,
     path: &Path,
 ) -> Result<Option<String>, IoError> {
@@ -175,7 +175,7 @@ fn parse_line(raw: &str, file: &str, ln: usize, mots: bool) -> Result<Option<Rec
 
 /// Checks every line of a MOT/MOTS file (so a bad line fails before anything is written) and
 /// notes what the run needs to know up front.
-pub(super) fn scan(
+pub(crate) fn scan(
     path: &Path,
     mots: bool,
     image_size: Option<(u32, u32)>,
@@ -221,7 +221,7 @@ pub(super) fn scan(
 
 /// A mask must be of the frame it belongs to: `size`, the seqinfo's when `from_seqinfo`,
 /// else the first mask's.
-pub(super) fn check_mask_size(
+pub(crate) fn check_mask_size(
     r: &Record,
     size: Option<(u32, u32)>,
     from_seqinfo: bool,
@@ -249,7 +249,7 @@ pub(super) fn check_mask_size(
 }
 
 /// The detections, one frame's records at a time, in frame order.
-pub(super) enum Groups {
+pub(crate) enum Groups {
     /// Held in memory, sorted by frame (Scalabel JSON, or a text file not sorted by frame).
     Loaded { records: Vec<Record>, at: usize },
     /// A text file sorted by frame, read line by line.
@@ -263,13 +263,13 @@ pub(super) enum Groups {
 }
 
 impl Groups {
-    pub(super) fn loaded(mut records: Vec<Record>) -> Self {
+    pub(crate) fn loaded(mut records: Vec<Record>) -> Self {
         records.sort_by_key(|r| r.frame);
         Groups::Loaded { records, at: 0 }
     }
 
     /// The next frame's number and records.
-    pub(super) fn next_group(&mut self) -> Result<Option<(u32, Vec<Record>)>, IoError> {
+    pub(crate) fn next_group(&mut self) -> Result<Option<(u32, Vec<Record>)>, IoError> {
         match self {
             Groups::Loaded { records, at } => {
                 let Some(first) = records.get(*at) else {
