@@ -56,10 +56,11 @@ async function trackWithKeyframe(page) {
     if (s.learned.keyframes >= 1) break;
     assert.ok(s.processed < s.frames - 20, `a keyframe landed before frame ${s.frames - 20} (state ${JSON.stringify(s.learned)})`);
     assert.ok(Date.now() < deadline, 'a keyframe within 4 minutes');
-    // While a keyframe runs the clip waits for it: its masks replace the detector's only a
-    // frame or two after their own (`REPLACE_AGE`), and on this machine one takes seconds.
-    if (!s.learned.running) await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.stepForward());
-    await page.waitForTimeout(400);
+    // While a keyframe runs (as of the last frame) the clip waits for it before the next
+    // frame: its masks replace the detector's only a frame or two after their own
+    // (`REPLACE_AGE`), and on this machine one takes seconds.
+    await page.waitForTimeout(s.learned.running ? 6000 : 400);
+    await page.evaluate(() => /** @type {any} */ (window).__shapetrack.app.stepForward());
   }
   await page.keyboard.press('Space');
   return untilState(page, (s) => s.processed === s.frames && !s.playing, 180_000);

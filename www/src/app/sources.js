@@ -77,7 +77,7 @@ export async function openSource(app, src) {
     app.render();
     throw e;
   }
-  app.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, failed: null };
+  app.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, running: false, failed: null };
   /** @type {AnySource} */
   const source = src ?? {
     kind: 'synth',

@@ -227,6 +227,7 @@ export function learnedStep(app, l) {
   const s = app.learnedStats;
   s.keyframes = l.keyframes;
   s.ms = l.ms;
+  s.running = l.running;
   if (l.use) {
     s.frames += 1;
     s.used += l.use.used;
