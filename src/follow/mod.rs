@@ -338,10 +338,10 @@ impl Follower {
                     && kept >= 1.0 - cfg.learned_max_shrink
                     && added <= cfg.learned_max_growth
                 {
+                    let previous = std::mem::replace(&mut mask, own);
                     if iou < cfg.learned_carry_iou {
-                        own_estimate = Some((mask.clone(), confidence));
+                        own_estimate = Some((previous, confidence));
                     }
-                    mask = own;
                     confidence = confidence.max(iou);
                     from_learned = true;
                 } else if !trusted {
@@ -380,12 +380,12 @@ impl Follower {
         // The output; the follower's state below goes on from its own estimate when a learned
         // outline is not carried.
         let output = mask;
-        let (mask, from_learned_state) = match own_estimate {
+        let (mask, from_learned_state) = match &own_estimate {
             Some((own, c)) if !from_detection => {
-                confidence = c;
+                confidence = *c;
                 (own, false)
             }
-            _ => (output.clone(), from_learned),
+            _ => (&output, from_learned),
         };
         // What the next frame warps: the colour-refined outline only when configured, since
         // refinement errors compound when fed back (see `carry_refined`).
@@ -418,9 +418,9 @@ impl Follower {
                     feats: new_feats,
                 };
             }
-            let ring = ring(&mask, cfg);
+            let ring = ring(mask, cfg);
             self.colour
-                .update(frame, &mask, &ring, cfg.max_side, cfg.colour_rate);
+                .update(frame, mask, &ring, cfg.max_side, cfg.colour_rate);
         }
         if !carried.is_empty() {
             self.last = carried;

@@ -96,11 +96,8 @@ export class App {
      * @type {'off' | 'keyframes'}
      */
     this.learnedPolicy = 'off';
-    /**
-     * What the learned stage gave this source: keyframes done, frames that took learned masks,
-     * masks replaced, regions added, and why the stage stopped (null: it did not).
-     */
-    this.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, running: false, failed: /** @type {string | null} */ (null) };
+    /** What the learned stage gave this source (`emptyLearnedStats`). */
+    this.learnedStats = tracking.emptyLearnedStats();
     this.lastEdit = '';
     /** The last source or detector change (see `inTurn`). @type {Promise<void>} */
     this.changes = Promise.resolve();

@@ -4,6 +4,7 @@
 import { TrackTable } from '../model/tracks.js';
 import { byId } from '../lib/dom.js';
 import { mayReplace } from './editing.js';
+import { emptyLearnedStats } from './tracking.js';
 import { videoSource, imageSource, webcamSource } from '../sources/sources.js';
 
 /**
@@ -77,7 +78,7 @@ export async function openSource(app, src) {
     app.render();
     throw e;
   }
-  app.learnedStats = { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, running: false, failed: null };
+  app.learnedStats = emptyLearnedStats();
   /** @type {AnySource} */
   const source = src ?? {
     kind: 'synth',

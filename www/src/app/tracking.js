@@ -219,6 +219,15 @@ export function choiceNote(app, msg) {
 }
 
 /**
+ * What the learned stage gave a source so far (`App.learnedStats`): keyframes done and the
+ * last one's ms, frames that took learned masks, masks replaced, regions added, whether a
+ * keyframe runs, and why the stage stopped (null: it did not). Fresh for each source.
+ */
+export function emptyLearnedStats() {
+  return { keyframes: 0, ms: 0, frames: 0, used: 0, added: 0, running: false, failed: /** @type {string | null} */ (null) };
+}
+
+/**
  * Counts what a frame took from the learned stage; says once why it stopped.
  * @param {App} app
  * @param {NonNullable<StepResult['learned']>} l
