@@ -5,7 +5,8 @@
 //
 //   node scripts/setup.mjs          npm deps, the wasm32 target, wasm-bindgen-cli
 //   node scripts/setup.mjs --e2e    also Debian's chromium for the Playwright suite
-//   node scripts/setup.mjs --python also the Python venv of the package's tests (PYVENV)
+//   node scripts/setup.mjs --python also the Python venv of the package's tests (PYVENV; `npm test`
+//                                   makes it whenever its `python package` step runs)
 
 import { execFileSync, spawnSync } from 'node:child_process';
 import { existsSync, statSync } from 'node:fs';

@@ -8,8 +8,7 @@
 //
 //   node scripts/test.mjs              everything
 //   node scripts/test.mjs --only=e2e   steps whose name contains "e2e" (plus their builds)
-//   node scripts/test.mjs --only=python   the Python package (python/; opt-in, not in the
-//                                         default run yet: see its step)
+//   node scripts/test.mjs --only=python   the Python package (python/) alone
 
 import { spawnSync } from 'node:child_process';
 import { readFileSync, readdirSync } from 'node:fs';
@@ -45,10 +44,11 @@ function wasmTests() {
 
 /** @type {Step[]} */
 const steps = [
-  // The Python package's venv only when its step is asked for (see `python package`).
-  { name: 'setup', run: () => setup({ e2e: true, python: !!only && 'python package'.includes(only) }) },
+  // The Python package's venv only when its step runs (`--only=e2e` does not need it).
+  { name: 'setup', run: () => setup({ e2e: true, python: want.has('python package') }) },
   { name: 'cargo fmt', needs: ['setup'], run: () => sh('cargo', ['fmt', '--all', '--check']) },
-  { name: 'cargo clippy', needs: ['setup'], run: () => sh('cargo', ['clippy', '--all-targets', '--', '-D', 'warnings']) },
+  // `--workspace`: the Python bindings crate (python/) too, in the same run as the core.
+  { name: 'cargo clippy', needs: ['setup'], run: () => sh('cargo', ['clippy', '--workspace', '--all-targets', '--', '-D', 'warnings']) },
   {
     // src/wasm/ only exists for wasm32, so the native clippy run never sees it. Every target
     // `wasm-pack test --node` builds (lib, CLI, all tests, examples; benches use criterion,
@@ -67,38 +67,48 @@ const steps = [
     needs: ['setup'],
     run: () => sh('cargo', ['doc', '--no-deps', '--lib'], { RUSTDOCFLAGS: '-D warnings' }),
   },
-  { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--no-fail-fast']) },
+  // In the `ci` profile: `test` under another name (Cargo.toml), so that the Python package's
+  // extension can be built in it too and link these dependencies (see `python package`).
+  { name: 'cargo test', needs: ['setup'], run: () => sh('cargo', ['test', '--profile', 'ci', '--no-fail-fast']) },
   {
     // The mutation fuzzer with overflow checks on (an overflow that wraps silently in release is
-    // a finding), 100,000 executions per reader. In the test profile (opt-level 2, overflow
-    // checks on), so it reuses the `cargo test` build instead of a second full release build
-    // (~4 min on 2 cores); `cargo test` itself runs it with 2,000. The long run (10^6 each) is
-    // in the README.
+    // a finding), 100,000 executions per reader, the readers spread over the cores. In the
+    // `cargo test` step's profile (`ci` = `test`: opt-level 2, overflow checks on), so it reuses
+    // that build instead of a second full release build (~4 min on 2 cores); `cargo test`
+    // itself runs it with 2,000. The long run (10^6 each) is in the README.
     name: 'fuzz parsers',
     needs: ['setup'],
-    run: () => sh('cargo', ['test', '--test', 'fuzz_parsers'], { FUZZ_ITERS: '100000' }),
+    run: () => sh('cargo', ['test', '--profile', 'ci', '--test', 'fuzz_parsers'], { FUZZ_ITERS: '100000' }),
   },
   {
-    // The Python package (python/, issue 67): built and installed into the venv setup made,
-    // then its tests, which compare it with the CLI bit for bit (the release CLI, built here
-    // first: the package's build then reuses the core's compiled dependencies, same profile
-    // and target/) and run the Ray batch locally.
+    // The Python package (python/, issue 67): built and installed into the venv setup made, then
+    // its tests, which compare it with the CLI bit for bit on the MOT15 sequences, check the
+    // supervision adapter and run the Ray batch locally (a corrupt det file, a rerun that
+    // recomputes nothing).
     //
-    // Opt-in for now (`node scripts/test.mjs --only=python`), not in the default run: from a
-    // cold clone its release builds (the CLI, then the extension's thin-LTO link) took ~40
-    // minutes on the 2-core machine under load, more than CI's whole budget (issue 67 stays
-    // open until the step reuses `cargo test`'s build).
+    // The CLI and the extension come from the `ci` profile (`test` under another name) that
+    // `cargo test` has built above: the CLI is the binary it built for its integration tests
+    // (target/ci/shapetrack; `cargo test --no-run` only confirms it is up to date), and the
+    // extension is built in that profile with every dependency's features equal to the test
+    // build's (python/Cargo.toml says how), so it links the artifacts `cargo test` compiled and
+    // this step compiles only PyO3 and the bindings crate. The bit-for-bit comparison wants the
+    // package and the CLI from one profile. (In release, from a cold clone, the two builds took
+    // ~40 minutes.) Not `--profile test`: maturin runs `cargo rustc`, which builds a test
+    // harness in that profile, not the module.
     name: 'python package',
-    optIn: true,
     needs: ['setup'],
     run: () => {
-      sh('cargo', ['clippy', '-p', 'shapetrack-python', '--', '-D', 'warnings']);
-      sh('cargo', ['build', '--release', '--bin', 'shapetrack']);
+      sh('cargo', ['test', '--profile', 'ci', '--no-run']);
       // The venv's bin/ first: the build backend runs the `maturin` executable by name.
       const PATH = `${dirname(PYTHON)}:${process.env.PATH}`;
-      sh(PYTHON, ['-m', 'pip', 'install', '--quiet', '--disable-pip-version-check', '--no-build-isolation', './python'], { PATH });
+      sh(
+        PYTHON,
+        ['-m', 'pip', 'install', '--quiet', '--disable-pip-version-check', '--no-build-isolation',
+          '--config-settings=build-args=--profile ci', './python'],
+        { PATH },
+      );
       sh(PYTHON, ['-m', 'pytest', '-q', '-p', 'no:cacheprovider', 'python/tests'], {
-        SHAPETRACK_CLI: join(ROOT, 'target', 'release', 'shapetrack'),
+        SHAPETRACK_CLI: join(ROOT, 'target', 'ci', 'shapetrack'),
       });
     },
   },
