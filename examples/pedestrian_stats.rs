@@ -14,13 +14,17 @@
 
 use shapetrack::synth::{Family, SceneStats, SynthConfig, PEDESTRIANS};
 
+/// The grid's seeds (`shapetrack::grid::SYNTH_SEEDS`; the grid is native only, this example
+/// also builds for wasm32).
+const SEEDS: [u64; 3] = [101, 102, 103];
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let tuned = match &args[..] {
         [crowd, alive, ..] => Some((serde_json::from_str(crowd)?, alive.parse::<u32>()?)),
         _ => None,
     };
-    let mut scenes: Vec<(String, SynthConfig)> = shapetrack::grid::SYNTH_SEEDS
+    let mut scenes: Vec<(String, SynthConfig)> = SEEDS
         .iter()
         .map(|&s| {
             let cfg = match tuned {
