@@ -10,6 +10,12 @@
 //!   at 640×480 and 1280×720, the scenes of `shapetrack bench`), for the scaling target of
 //!   issue 10 (200 shapes ≤ 12× the 20-shape cost).
 //!
+//! - the dense crowd of issue 64 (`track_pedestrians`): the online tracker on the
+//!   pedestrian family's scenes (`SynthConfig::pedestrians`, 1920×1080) with about 50, 100
+//!   and 200 people in view per frame, box mode (the visible parts' jittered boxes,
+//!   `Config::default()`) and mask mode (visible masks with frames, `Config::masks()`), for
+//!   the near-linear cost asked there; figures in docs/benchmarks.md.
+//!
 //! `cargo bench --bench track`. For the per-phase split and more sizes: `shapetrack bench`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -162,5 +168,49 @@ fn bench_mask_scaling(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_masks, bench_mask_scaling);
+/// Frames of the pedestrian crowd timed per sample: 30 keep the 200-person mask scene's
+/// frames (6 MB each at 1080p) and one sample within seconds.
+const CROWD_FRAMES: u32 = 30;
+
+/// The online tracker on the dense crowd with about 50, 100 and 200 people in view, box and
+/// mask mode. The walkers alive at once are scaled so that about `people` are in view (46 of
+/// the family's 50 are); `cargo run --release --example pedestrian_stats` measures the scenes.
+fn bench_pedestrians(c: &mut Criterion) {
+    let mut g = c.benchmark_group("track_pedestrians");
+    g.sample_size(10);
+    for people in [50u32, 100, 200] {
+        let alive = (people as f64 * shapetrack::synth::PEDESTRIANS as f64 / 46.4).round() as u32;
+        let cfg = SynthConfig {
+            frames: CROWD_FRAMES,
+            ..SynthConfig::pedestrians(7, alive)
+        };
+        let (w, h) = (cfg.width, cfg.height);
+        let frames: Vec<SynthFrame> = Scene::new(cfg).expect("scene").collect();
+        g.throughput(Throughput::Elements(frames.len() as u64));
+        g.bench_with_input(BenchmarkId::new("boxes", people), &frames, |b, f| {
+            b.iter(|| {
+                let mut t = Tracker::new(Config::default())
+                    .expect("config")
+                    .with_image_size(w, h);
+                let mut n = 0;
+                for fr in f {
+                    n += t.update(None, &fr.box_detections).expect("track").len();
+                }
+                black_box(n)
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("masks", people), &frames, |b, f| {
+            b.iter(|| black_box(track_masks(f)))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    bench,
+    bench_masks,
+    bench_mask_scaling,
+    bench_pedestrians
+);
 criterion_main!(benches);

@@ -21,6 +21,9 @@ Usage: scripts/grid.py [--cells GLOB,..] [--datasets D,..] [--peers LIST] [--out
   --write     where to write grid.md/grid.json (default tests/data/quality; `-` for nowhere)
   --from-json write grid.md (and grid.json) again from a grid.json this script wrote, without
               running anything: the tables' form changed, the figures did not
+  --merge     with --cells or --datasets: put the selected cells' rows into the grid.json already
+              at --write (replacing those cells, keeping every other), and note the partial run
+              in grid.md, instead of writing a grid of the selected cells alone
 
 Stages: `shapetrack grid prepare` writes each cell in TrackEval's layout with its detections;
 `shapetrack grid run` runs ours; the peers run through ../shared/tools/peers/run_baseline.py
@@ -236,7 +239,11 @@ def render(result):
           f"(dataset/detector model) and tracker, all on the same detections. Bold: best in the row. "
           f"Made {result['made']} at commit {result['commit']}{' (with uncommitted changes)' if result.get('dirty') else ''} "
           f"by `{result['command']}` "
-          f"({sum(stages.values()) / 60:.0f} min: " + ", ".join(f"{k} {v:.0f} s" for k, v in stages.items()) + ").\n",
+          f"({sum(stages.values()) / 60:.0f} min: " + ", ".join(f"{k} {v:.0f} s" for k, v in stages.items()) + ")"
+          + "".join(f"; cells {', '.join(u['cells'])} (re)made {u['made']} at commit {u['commit']}"
+                    f"{' (with uncommitted changes)' if u.get('dirty') else ''} by `{u['command']}` "
+                    f"({sum(u['stages_seconds'].values()) / 60:.0f} min)" for u in result.get("updates", []))
+          + ".\n",
           f"- ours online ≥ best peer on HOTA: {summary['online_ge_best_hota']} / {n} cells; ≥ SORT: {summary['online_ge_sort_hota']} / {n}",
           f"- ours offline ≥ best peer on HOTA and IDF1: {summary['offline_ge_best_hota_idf1']} / {n}",
           f"- ours with masks online ≥ best peer on HOTA: {summary['masks_online_ge_best_hota']} / {summary['mask_cells']} mask cells; "
@@ -269,6 +276,22 @@ def write_tables(result, where):
         json.dump(result, open(os.path.join(where, "grid.json"), "w"), indent=1, sort_keys=True)
 
 
+def merge(old, new, cells):
+    """`old` (a whole grid's grid.json) with the rows of `cells` taken from `new` (a run of
+    those cells alone), and the run noted under `updates`: grid.md keeps saying how every figure
+    was made."""
+    out = {k: v for k, v in old.items() if k not in ("summary", "trackeval_max_difference")}
+    of = lambda key: key.rsplit("/", 1)[0]
+    out["ours"] = {**{k: v for k, v in old["ours"].items() if k not in cells}, **new["ours"]}
+    out["trackeval"] = {**{k: v for k, v in old.get("trackeval", {}).items() if of(k) not in cells},
+                        **new.get("trackeval", {})}
+    out["fps"] = {**{k: v for k, v in old.get("fps", {}).items() if of(k) not in cells},
+                  **new.get("fps", {})}
+    out["updates"] = [u for u in old.get("updates", []) if not set(u["cells"]) <= set(cells)] + [
+        {k: new[k] for k in ("made", "commit", "dirty", "command", "stages_seconds")} | {"cells": cells}]
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cells", default="")
@@ -283,6 +306,8 @@ def main():
     ap.add_argument("--rerun-peers", action="store_true",
                     help="run the peers even where their results for the same detections exist")
     ap.add_argument("--write", default=os.path.join(REPO, "tests", "data", "quality"))
+    ap.add_argument("--merge", action="store_true",
+                    help="merge the selected cells into the grid.json at --write (module docs)")
     ap.add_argument("--from-json", default=None,
                     help="write grid.md again from this grid.json (no run): a change of the tables' form")
     a = ap.parse_args()
@@ -363,12 +388,15 @@ def main():
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=REPO).stdout.strip()
     dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True, cwd=REPO).stdout.strip()
-    cmd = "python3 scripts/grid.py" + (f" --cells {a.cells}" if a.cells else "") + (f" --datasets {a.datasets}" if a.datasets else "")
+    cmd = "python3 scripts/grid.py" + (f" --cells {a.cells}" if a.cells else "") + (f" --datasets {a.datasets}" if a.datasets else "") + (" --merge" if a.merge else "")
     fps = {f"{c}/{p}": v for (p, c), v in peer_fps.items()}
     fps.update({f"{c}/{t}": v for (c, t), v in ours_fps.items()})
     result = {"made": now, "commit": commit, "dirty": bool(dirty), "command": cmd, "stages_seconds": stages,
               "peers": peers, "ours": {c.replace("__", "/"): ours_scores.get(c.replace("__", "/"), {}) for c in cells},
               "trackeval": {f"{c.replace('__', '/')}/{t}": v for (c, t), v in te.items()}, "fps": fps}
+    if a.merge:
+        result = merge(json.load(open(os.path.join(a.write, "grid.json"))), result,
+                       [c.replace("__", "/") for c in cells])
     write_tables(result, a.write)
     print(f"done in {(time.time() - t_start) / 60:.1f} min", file=sys.stderr)
 

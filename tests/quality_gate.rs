@@ -14,6 +14,9 @@
 //! - **Masks with frames** on one scene of three synthetic families (deformation, occluders,
 //!   a look-alike crowd) under the `masks-clean` or `masks-ragged` detector model: the mask
 //!   preset, and the box defaults on the same detections' boxes.
+//! - **The dense pedestrian crowd** (issue 64: 1920×1080, ~46 people a frame, median
+//!   visibility ~0.4, amodal ground truth), one scene under both mask models, masks with frames
+//!   and box mode.
 //! - **Masks without frames**: BDD100K's real model masks (5 fps), the mask preset and the
 //!   box defaults, as the grid's `bdd-masks/real` cell (the lost-track rules without frames,
 //!   `Config::without_frames`, are checked nowhere else on real data).
@@ -133,6 +136,8 @@ fn quality_gate() {
         (Family::Deform, "masks-ragged"),
         (Family::Occluders, "masks-clean"),
         (Family::Crowd, "masks-ragged"),
+        (Family::Pedestrians, "masks-clean"),
+        (Family::Pedestrians, "masks-ragged"),
     ] {
         let name = family.name();
         let scene = SynthConfig::family(family, grid::SYNTH_SEEDS[0]);

@@ -4,7 +4,8 @@
 // the wasm suites are the `wasm_*` and `*_wasm` files.
 #![cfg(not(target_arch = "wasm32"))]
 
-use shapetrack::synth::{Family, GtObject, Scene, SynthConfig};
+use shapetrack::frame::BBox;
+use shapetrack::synth::{Family, GtObject, Scene, SceneStats, SynthConfig};
 use std::collections::BTreeMap;
 
 /// Ground truth per frame, and a hash of the images.
@@ -316,4 +317,128 @@ fn new_settings_are_validated() {
     let mut c = SynthConfig::family(Family::Crowd, 1);
     c.appearance.similar_colours = Some(f64::NAN);
     assert!(Scene::new(c).is_err());
+    let mut c = SynthConfig::family(Family::Pedestrians, 1);
+    c.crowd.as_mut().unwrap().walkway = (0.9, 0.3);
+    assert!(Scene::new(c).is_err(), "an empty walkway");
+    let mut c = SynthConfig::family(Family::Pedestrians, 1);
+    c.crowd.as_mut().unwrap().height.1 = f64::INFINITY;
+    assert!(Scene::new(c).is_err());
+    let mut c = SynthConfig::family(Family::Pedestrians, 1);
+    c.noise.occlusion_miss = -0.1;
+    assert!(Scene::new(c).is_err());
+}
+
+/// Whether box `b` lies within box `a`.
+fn contains(a: &BBox, b: &BBox) -> bool {
+    b.x >= a.x && b.y >= a.y && b.x2() <= a.x2() && b.y2() <= a.y2()
+}
+
+/// The dense crowd's scene, shortened to keep the test in seconds (people are placed on the
+/// walkway from the first frame, so the density holds from the start).
+fn pedestrians(seed: u64, frames: u32) -> SynthConfig {
+    SynthConfig {
+        frames,
+        ..SynthConfig::family(Family::Pedestrians, seed)
+    }
+}
+
+#[test]
+fn pedestrians_are_a_dense_half_hidden_crowd() {
+    // Issue 64's crowd: ~46 people a frame, median visibility 0.44, 1080p at 25 fps.
+    let cfg = pedestrians(2, 60);
+    assert_eq!((cfg.width, cfg.height, cfg.fps), (1920, 1080, 25.0));
+    let s = SceneStats::measure(&cfg).unwrap();
+    eprintln!("{s:?}");
+    assert!(
+        (38.0..=56.0).contains(&s.objects_mean),
+        "people per frame {}",
+        s.objects_mean
+    );
+    let median_vis = s.visibility_quantiles[2];
+    assert!(
+        (0.3..=0.6).contains(&median_vis),
+        "median visibility {median_vis}"
+    );
+    assert!(
+        (0.003..=0.1).contains(&s.hidden_fraction),
+        "fully hidden {}",
+        s.hidden_fraction
+    );
+    // Misses follow visibility: the barely visible are missed far more than the visible.
+    let [low, mid, high] = s.missed_by_visibility;
+    assert!(low > mid && mid > high, "{:?}", s.missed_by_visibility);
+    assert!(low > 0.4 && high < 0.1, "{:?}", s.missed_by_visibility);
+    assert!(s.gaps > 50 && s.gap_p90 >= 3.0, "{s:?}");
+    // Same seed, same figures; another seed, another scene.
+    assert_eq!(SceneStats::measure(&cfg).unwrap(), s);
+    assert_ne!(SceneStats::measure(&pedestrians(3, 60)).unwrap(), s);
+}
+
+#[test]
+fn pedestrians_walk_both_ways_with_amodal_truth_and_shrunk_detections() {
+    let cfg = pedestrians(4, 40);
+    let morph = cfg.noise.morph_max as f64;
+    let (w, h) = (cfg.width as f64, cfg.height as f64);
+    let mut first_x: BTreeMap<u64, f64> = BTreeMap::new();
+    let mut last_x: BTreeMap<u64, f64> = BTreeMap::new();
+    let (mut partial, mut shrunk, mut nearest_checked) = (0, 0, 0);
+    for f in Scene::new(cfg).unwrap() {
+        let amodal = f.amodal_gt_records();
+        assert_eq!(amodal.len(), f.silhouettes.len());
+        for (r, s) in amodal.iter().zip(&f.silhouettes) {
+            assert_eq!(
+                (r.id as u64, r.bbox, r.visibility),
+                (s.id, s.bbox, s.visibility)
+            );
+            // A hidden person keeps its box but has no mask; a visible one has its visible
+            // pixels, inside the whole body's box.
+            assert_eq!(r.mask.is_some(), s.visibility > 0.0);
+            first_x.entry(s.id).or_insert(s.bbox.center().x);
+            last_x.insert(s.id, s.bbox.center().x);
+        }
+        for g in &f.gt {
+            let s = f.silhouettes.iter().find(|s| s.id == g.id).unwrap();
+            assert!(contains(&s.bbox, &g.bbox), "visible part outside the body");
+        }
+        // Detections report the visible part: inside the amodal box (up to the detector's
+        // dilation), and smaller than it for partly hidden people.
+        for (d, src) in f.detections.iter().zip(&f.detection_sources) {
+            let Some(id) = src else { continue };
+            let s = f.silhouettes.iter().find(|s| s.id == *id).unwrap();
+            assert!(contains(&s.bbox.expanded(morph), &d.bbox), "{d:?} {s:?}");
+            if s.visibility < 0.6 {
+                partial += 1;
+                if d.bbox.area() < 0.8 * s.bbox.area() {
+                    shrunk += 1;
+                }
+            }
+        }
+        // Depth by the box's bottom: the person whose feet are lowest is in front of all
+        // (unless cut by the frame border, which lowers visibility too, or tied).
+        let mut by_bottom: Vec<_> = f.silhouettes.iter().collect();
+        by_bottom.sort_by(|a, b| b.bbox.y2().total_cmp(&a.bbox.y2()));
+        if let [a, b, ..] = by_bottom[..] {
+            let inside = a.bbox.x > 0.0 && a.bbox.x2() < w && a.bbox.y2() < h;
+            if inside && a.bbox.y2() > b.bbox.y2() + 2.0 {
+                nearest_checked += 1;
+                assert!(a.visibility > 0.999, "nearest person hidden: {a:?}");
+            }
+        }
+    }
+    assert!(
+        partial > 100 && shrunk * 10 > partial * 6,
+        "{shrunk} of {partial}"
+    );
+    assert!(nearest_checked > 5, "{nearest_checked}");
+    // Both directions, at walking pace (0.47–1.0 heights a second): nobody stands still.
+    let (mut right, mut left) = (0, 0);
+    for (id, x0) in &first_x {
+        let dx = last_x[id] - x0;
+        if dx > 5.0 {
+            right += 1;
+        } else if dx < -5.0 {
+            left += 1;
+        }
+    }
+    assert!(right >= 15 && left >= 15, "right {right}, left {left}");
 }

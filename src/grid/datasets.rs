@@ -14,7 +14,8 @@
 //!   objects); classes are pooled, as the peers are class-agnostic.
 //! - [`bdd_masks`]: the BDD100K segmentation-tracking sample: ground-truth instance masks
 //!   and a real model's masks (no scores: 1.0), for mask mode without frames.
-//! - [`synthetic`]: the generator's scenes with frames, visible-part masks and visibility.
+//! - [`synthetic`]: the generator's scenes with frames, visible-part masks and visibility
+//!   (the pedestrian crowd's boxes amodal).
 
 use std::path::{Path, PathBuf};
 
@@ -194,15 +195,22 @@ pub fn bdd_masks(shared: &Path) -> Result<Dataset, GridError> {
     })
 }
 
-/// Synthetic sequences `name-s<seed>` of the scenes `configs` (ground truth: the visible
-/// parts' boxes and masks, with their visibility).
+/// Synthetic sequences `name-s<seed>` of the scenes `configs`. Ground truth: the visible
+/// parts' boxes and masks, with their visibility; for a crowd of pedestrians
+/// ([`SynthConfig::crowd`]) the amodal boxes instead, hidden people included, as the
+/// MOTChallenge pedestrian benchmarks annotate (masks still the visible pixels: the
+/// detector models segment what they see).
 pub fn synthetic(name: &str, configs: &[SynthConfig]) -> Result<Dataset, GridError> {
     let mut sequences = Vec::new();
     for cfg in configs {
         let mut scene = Scene::new(cfg.clone()).map_err(GridError::Synth)?;
         let mut gt = Vec::new();
         while let Some(f) = scene.frame() {
-            gt.extend(f.gt_records());
+            if cfg.crowd.is_some() {
+                gt.extend(f.amodal_gt_records());
+            } else {
+                gt.extend(f.gt_records());
+            }
         }
         sequences.push(GridSequence {
             name: format!("{name}-s{}", cfg.seed),

@@ -14,7 +14,8 @@
 //! - **misses** ([`MissModel`]): at random, in bursts (a two-state Markov chain per object,
 //!   since real misses come in runs), more often for occluded objects (visibility from the
 //!   ground truth when it has a real one, else estimated from the boxes in front) and for
-//!   small ones (relative to the sequence's median height);
+//!   small ones (relative to the sequence's median height); a fully hidden object (visibility
+//!   0 in the ground truth) is never detected;
 //! - **box jitter** proportional to the box size;
 //! - **false positives** ([`FalsePositives`]) near objects (beside one, IoU with it below
 //!   ~0.3) and far from them (sizes drawn from the sequence's own objects), some of them
@@ -387,7 +388,10 @@ impl DetectorModel {
                 let z = latent.entry(o.id).or_insert(n_score);
                 *z = SCORE_MEMORY * *z + (1.0 - SCORE_MEMORY * SCORE_MEMORY).sqrt() * n_score;
                 let q = phi(*z);
-                if dropped || !(o.bbox.w > 0.0 && o.bbox.h > 0.0) {
+                // A fully hidden object (ground truth with visibility 0: amodal annotations
+                // keep hidden people) shows the detector nothing.
+                let hidden = o.visibility.is_some_and(|v| v <= 0.0);
+                if dropped || hidden || !(o.bbox.w > 0.0 && o.bbox.h > 0.0) {
                     continue;
                 }
                 let vis = o

@@ -110,6 +110,56 @@ impl Default for MotionConfig {
     }
 }
 
+/// Pedestrians on a walkway seen from a fixed, raised camera: random objects become upright
+/// walkers (a head on shoulders over a body, no rotation) whose feet lie on a band of the image, whose height
+/// follows a linear perspective (smaller higher up, nearer the horizon), who walk left or right
+/// at a constant speed drawn per person, and who are drawn in depth order by the bottom of
+/// their box (the lower the feet, the nearer the camera, the later drawn: nearer people hide
+/// farther ones). The ground truth of such a scene is also given as amodal boxes
+/// ([`SynthFrame::amodal_gt_records`](super::SynthFrame::amodal_gt_records)): the whole body's
+/// box, hidden or not, as the MOTChallenge pedestrian benchmarks annotate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrowdConfig {
+    /// The walkway: the range of the box centres' rows, as fractions of the frame height
+    /// (far edge, near edge).
+    pub walkway: (f64, f64),
+    /// A walker's height in pixels with its centre on the walkway's far edge and on its near
+    /// edge (linear between them and beyond).
+    pub height: (f64, f64),
+    /// Each person's height relative to the perspective's, drawn in this range.
+    pub stature: (f64, f64),
+    /// Width over height, drawn per person in this range.
+    pub width_ratio: (f64, f64),
+    /// Walking speed in body heights per second, drawn per person (about 0.8–1.7 m/s for a
+    /// 1.7 m person at `(0.47, 1.0)`); converted to pixels per frame with the scene's `fps`
+    /// and the walker's height.
+    pub speed: (f64, f64),
+    /// Largest angle (radians) of a walking direction from horizontal.
+    pub drift: f64,
+}
+
+impl CrowdConfig {
+    /// A walker's height (pixels, before its stature) with its centre on row `y`: linear
+    /// across the walkway, held at its edges' heights beyond them (a walker drifting off the
+    /// walkway keeps a bounded size, and so a bounded texture).
+    pub fn height_at(&self, y: f64, frame_height: f64) -> f64 {
+        let (y0, y1) = (self.walkway.0 * frame_height, self.walkway.1 * frame_height);
+        let t = if y1 > y0 {
+            ((y - y0) / (y1 - y0)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        (self.height.0 + t * (self.height.1 - self.height.0)).max(4.0)
+    }
+
+    /// The largest outline radius a walker can have (the tallest, widest one's box corner).
+    pub fn max_reach(&self) -> f64 {
+        let h = 0.5 * self.height.0.max(self.height.1) * self.stature.1;
+        h * (1.0 + self.width_ratio.1 * self.width_ratio.1).sqrt()
+    }
+}
+
 /// An axis-aligned occluder in whole pixels (drawn in front of every object).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct OccluderRect {
@@ -204,6 +254,11 @@ pub struct NoiseConfig {
     /// Objects (and split parts, false positives) with fewer visible pixels are never
     /// detected. Default `16`.
     pub min_area: u64,
+    /// Extra miss probability of a barely visible object, falling linearly to 0 at 70 %
+    /// visibility (a detector loses people half hidden in a crowd far more often than whole
+    /// ones). Default `0`.
+    #[serde(default)]
+    pub occlusion_miss: f64,
 }
 
 impl Default for NoiseConfig {
@@ -216,6 +271,7 @@ impl Default for NoiseConfig {
             split_prob: 0.02,
             box_jitter: 0.03,
             min_area: 16,
+            occlusion_miss: 0.0,
         }
     }
 }
@@ -231,6 +287,7 @@ impl NoiseConfig {
             split_prob: 0.0,
             box_jitter: 0.0,
             min_area: 1,
+            occlusion_miss: 0.0,
         }
     }
 }
@@ -304,6 +361,10 @@ pub struct SynthConfig {
     /// A panning and zooming camera; `None`: a static camera whose view is the world.
     #[serde(default)]
     pub camera: Option<CameraConfig>,
+    /// Random objects are pedestrians on a walkway ([`CrowdConfig`]); `None`: shapes moving
+    /// as `motion` says.
+    #[serde(default)]
+    pub crowd: Option<CrowdConfig>,
 }
 
 impl Default for SynthConfig {
@@ -321,6 +382,7 @@ impl Default for SynthConfig {
             noise: NoiseConfig::default(),
             scripted: Vec::new(),
             camera: None,
+            crowd: None,
         }
     }
 }

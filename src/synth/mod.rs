@@ -38,6 +38,7 @@
 
 mod background;
 mod config;
+mod crowd;
 pub(crate) mod math;
 mod motion;
 pub(crate) mod noise;
@@ -48,15 +49,17 @@ mod presets;
 pub(crate) mod raster;
 mod render;
 mod shape;
+mod stats;
 mod validate;
 
 pub use config::{
-    AppearanceConfig, BorderPolicy, CameraConfig, DeformConfig, MotionConfig, NoiseConfig,
-    OccluderRect, OcclusionConfig, ScriptedShape, SynthConfig,
+    AppearanceConfig, BorderPolicy, CameraConfig, CrowdConfig, DeformConfig, MotionConfig,
+    NoiseConfig, OccluderRect, OcclusionConfig, ScriptedShape, SynthConfig,
 };
-pub use output::{GtObject, SynthFrame};
-pub use presets::{Family, ScenePreset};
+pub use output::{GtObject, Silhouette, SynthFrame};
+pub use presets::{Family, ScenePreset, PEDESTRIANS};
 pub use shape::ShapeKind;
+pub use stats::SceneStats;
 pub use validate::SynthError;
 
 use math::{stream, uniform};
@@ -206,6 +209,7 @@ impl Scene {
         let index = self.next_index;
         let mut image = self.render();
         let gt = self.ground_truth();
+        let silhouettes = self.silhouettes(&gt);
         self.apply_appearance(index, &mut image);
         let noisy = noise::detect(
             &self.cfg.noise,
@@ -224,6 +228,7 @@ impl Scene {
             height: self.cfg.height,
             image,
             gt,
+            silhouettes,
             detections: noisy.masks,
             detection_sources: noisy.sources,
             box_detections: noisy.boxes,

@@ -74,7 +74,8 @@ impl Scene {
         }
         for o in &mut self.objects {
             o.age += 1;
-            if !o.scripted {
+            // Walkers keep their own pace; their size follows the perspective (`walk`).
+            if !o.scripted && o.walker.is_none() {
                 if o.accel_timer == 0 {
                     let (s, c) = sin_cos(uniform(&mut self.rng, 0.0, std::f64::consts::TAU));
                     let a = m.accel * uniform(&mut self.rng, 0.0, 1.0).sqrt();
@@ -153,5 +154,6 @@ impl Scene {
                 self.objects.push(o);
             }
         }
+        self.walk();
     }
 }

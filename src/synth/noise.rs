@@ -1,7 +1,8 @@
 //! The detection noise model: what a decent but imperfect instance-segmentation detector would
 //! report for a frame whose ground truth is known.
 //!
-//! Per visible object, independently: missed with probability `miss_rate`; otherwise its mask is
+//! Per visible object, independently: missed with probability `miss_rate` (plus, when set,
+//! `occlusion_miss` scaled by how far its visibility is below 0.7); otherwise its mask is
 //! eroded or dilated by 1..=`morph_max` pixels with probability `morph_prob`, cut in two across
 //! its principal axis with probability `split_prob`, and scored in (0, 1] (lower when the object
 //! is partly hidden). Then false positives: random blobs, `Binomial(16, false_positives/16)` of
@@ -49,7 +50,11 @@ pub(crate) fn detect(
     let mut sources = Vec::with_capacity(gt.len() + 2);
     for g in gt {
         let u: [f64; 5] = [rng.gen(), rng.gen(), rng.gen(), rng.gen(), rng.gen()];
-        if g.mask.area() < cfg.min_area || u[0] < cfg.miss_rate {
+        // Partly hidden objects are missed more often: the extra rate rises linearly from 0
+        // at 70 % visibility to `occlusion_miss` at none.
+        let hidden = ((0.7 - g.visibility) / 0.7).clamp(0.0, 1.0);
+        let p_miss = cfg.miss_rate + (1.0 - cfg.miss_rate) * cfg.occlusion_miss * hidden;
+        if g.mask.area() < cfg.min_area || u[0] < p_miss {
             continue;
         }
         let mut m = g.mask.clone();

@@ -32,6 +32,8 @@ pub(super) struct Object {
     pub(super) full_area: u64,
     /// Non-rigid deformation, when the scene deforms its objects.
     pub(super) deform: Option<Deform>,
+    /// A pedestrian of a crowd scene: its size follows the perspective.
+    pub(super) walker: Option<super::crowd::Walker>,
 }
 
 /// One object's deformation (see [`DeformConfig`]): its area pulsation and three radial
@@ -108,7 +110,7 @@ impl Scene {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn make_object(
+    pub(super) fn make_object(
         &mut self,
         kind: ShapeKind,
         poly: Vec<[f64; 2]>,
@@ -174,11 +176,15 @@ impl Scene {
             drawn: None,
             full_area: 0,
             deform,
+            walker: None,
         }
     }
 
     /// A random object, placed inside the frame (`inside`) or just outside a border, heading in.
     pub(super) fn random_object(&mut self, inside: bool) -> Object {
+        if let Some(c) = self.cfg.crowd {
+            return self.random_walker(&c, inside);
+        }
         let m = self.cfg.motion.clone();
         let rng = &mut self.rng;
         let kind = match &m.kinds {

@@ -25,6 +25,17 @@ pub struct GtObject {
     pub palette: Vec<[u8; 3]>,
 }
 
+/// One object's whole silhouette in one frame, hidden or not: the amodal ground truth.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Silhouette {
+    /// Object id.
+    pub id: u64,
+    /// Box of the whole silhouette (occluded parts included), clipped to the frame.
+    pub bbox: BBox,
+    /// Visible pixels over the full silhouette's pixels, in `[0, 1]` (0: fully hidden).
+    pub visibility: f64,
+}
+
 /// One rendered frame with its ground truth and detections.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SynthFrame {
@@ -38,6 +49,9 @@ pub struct SynthFrame {
     pub image: Vec<u8>,
     /// Ground truth of the visible objects, by increasing id.
     pub gt: Vec<GtObject>,
+    /// Every object with part of its silhouette inside the frame, visible or fully hidden,
+    /// by increasing id: the amodal ground truth.
+    pub silhouettes: Vec<Silhouette>,
     /// Noisy mask detections (each with its mask's tight box), object detections first (by id)
     /// then false positives.
     pub detections: Vec<Detection>,
@@ -66,6 +80,37 @@ impl SynthFrame {
                 visibility: g.visibility,
                 mask: Some(Rle::from_mask(&g.mask, self.width, self.height)),
                 flags: RecordFlags::default(),
+            })
+            .collect()
+    }
+
+    /// Amodal ground truth as records, as the MOTChallenge pedestrian benchmarks annotate:
+    /// one per [`Silhouette`] (fully hidden objects included, visibility 0), the box of the
+    /// whole silhouette, class 1, score 1, and the **visible** pixels as the mask when there
+    /// are any (what a segmenter could report; the evaluation scores boxes).
+    pub fn amodal_gt_records(&self) -> Vec<Record> {
+        let mut visible = self.gt.iter().peekable();
+        self.silhouettes
+            .iter()
+            .map(|s| {
+                // Both lists are by increasing id.
+                while visible.peek().is_some_and(|g| g.id < s.id) {
+                    visible.next();
+                }
+                let mask = visible
+                    .peek()
+                    .filter(|g| g.id == s.id)
+                    .map(|g| Rle::from_mask(&g.mask, self.width, self.height));
+                Record {
+                    frame: self.index,
+                    id: s.id as i64,
+                    bbox: s.bbox,
+                    score: 1.0,
+                    class: 1,
+                    visibility: s.visibility,
+                    mask,
+                    flags: RecordFlags::default(),
+                }
             })
             .collect()
     }

@@ -188,6 +188,16 @@ impl SynthConfig {
         range("noise.morph_max", n.morph_max as f64, 0.0, 10.0)?;
         range("noise.split_prob", n.split_prob, 0.0, 1.0)?;
         range("noise.box_jitter", n.box_jitter, 0.0, 1.0)?;
+        range("noise.occlusion_miss", n.occlusion_miss, 0.0, 1.0)?;
+        if let Some(c) = &self.crowd {
+            pair("crowd.walkway", c.walkway, 0.0, 1.0)?;
+            range("crowd.height.0", c.height.0, 4.0, 4000.0)?;
+            range("crowd.height.1", c.height.1, 4.0, 4000.0)?;
+            pair("crowd.stature", c.stature, 0.1, 10.0)?;
+            pair("crowd.width_ratio", c.width_ratio, 0.05, 2.0)?;
+            pair("crowd.speed", c.speed, 0.0, 100.0)?;
+            range("crowd.drift", c.drift, 0.0, 1.5)?;
+        }
         for s in &self.scripted {
             range("scripted.radius", s.radius, 1.0, 1000.0)?;
             range("scripted.aspect", s.aspect, 0.01, 10.0)?;
@@ -206,8 +216,18 @@ impl SynthConfig {
             let side = 2.0 * (r * std::f64::consts::SQRT_2 + 3.0);
             (3.0 * side * side) as u64
         };
-        let mut bytes = self.shapes as u64 * texture(m.radius.1);
-        let mut radius = m.radius.1;
+        // Walkers' outlines are sized by the crowd's perspective, not by `motion.radius`, and
+        // their textures by their own outline's reach (`shape::texture`: side 2·(reach + 2)).
+        let (mut radius, mut bytes) = match &self.crowd {
+            Some(c) => {
+                let side = 2.0 * (c.max_reach() + 3.0);
+                (
+                    c.max_reach(),
+                    self.shapes as u64 * (3.0 * side * side) as u64,
+                )
+            }
+            None => (m.radius.1, self.shapes as u64 * texture(m.radius.1)),
+        };
         for s in &self.scripted {
             let r = s.radius * s.aspect.max(1.0);
             radius = radius.max(r);

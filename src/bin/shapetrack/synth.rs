@@ -67,7 +67,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Preset::Default)]
     preset: Preset,
     /// A scenario family instead of a preset: crossing, crowd, deform, occluders,
-    /// enter-leave, camera (see `SynthConfig::family`).
+    /// enter-leave, camera, pedestrians (see `SynthConfig::family`).
     #[arg(long, conflicts_with = "preset")]
     family: Option<Family>,
     /// Frame rate written to seqinfo.ini [preset's; default 25].

@@ -54,6 +54,22 @@ fn exact_model_reports_the_ground_truth() {
 }
 
 #[test]
+fn fully_hidden_objects_are_never_detected() {
+    // Amodal ground truth (the pedestrian crowd) keeps hidden people with visibility 0: no
+    // detector sees them, whatever its occlusion rate; a barely visible one may be seen.
+    let mut gt = walkers(10, 3);
+    for f in &mut gt.frames {
+        f[0].visibility = Some(0.0);
+        f[1].visibility = Some(0.05);
+    }
+    let d = DetectorModel::exact("exact").apply(&gt, 1);
+    assert_eq!(d.len(), 20);
+    assert!(d
+        .iter()
+        .all(|r| r.bbox != gt.frames[r.frame as usize - 1][0].bbox));
+}
+
+#[test]
 fn random_misses_have_the_configured_rate_and_come_in_runs() {
     let gt = walkers(2000, 5);
     for burst in [1.0, 6.0] {
