@@ -174,7 +174,7 @@ const CROWD_FRAMES: u32 = 30;
 
 /// The online tracker on the dense crowd with about 50, 100 and 200 people in view, box and
 /// mask mode. The walkers alive at once are scaled so that about `people` are in view (46 of
-/// the family's 50 are); `cargo run --release --example pedestrian_stats` measures the scenes.
+/// the family's 51 are); `cargo run --release --example pedestrian_stats` measures the scenes.
 fn bench_pedestrians(c: &mut Criterion) {
     let mut g = c.benchmark_group("track_pedestrians");
     g.sample_size(10);

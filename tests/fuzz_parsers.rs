@@ -28,6 +28,7 @@
 
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use rayon::prelude::*;
 use shapetrack::detect::{
     BackgroundConfig, BackgroundSubtractor, BoxRefiner, Detector, MovingCameraDetector,
     MovingConfig, RefineConfig,
@@ -501,34 +502,9 @@ fn mutated_inputs_never_panic_or_hang() {
         );
         failures
     };
-    // The targets are independent, so they run on every core (a thread takes the next target
-    // when it is done with one): the same executions, in a fraction of the time.
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .clamp(1, targets.len().max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut failures: Vec<String> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut found = Vec::new();
-                    while let Some(t) =
-                        targets.get(next.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
-                    {
-                        found.extend(fuzz(t));
-                    }
-                    found
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|w| {
-                w.join()
-                    .expect("a fuzz thread panicked outside catch_unwind")
-            })
-            .collect()
-    });
+    // The targets are independent, so they run on every core (rayon's pool): the same
+    // executions, in a fraction of the time.
+    let mut failures: Vec<String> = targets.par_iter().flat_map_iter(fuzz).collect();
     failures.sort();
     std::panic::set_hook(hook);
     assert!(failures.is_empty(), "findings:\n{}", failures.join("\n"));

@@ -111,10 +111,10 @@ impl Default for MotionConfig {
 }
 
 /// Pedestrians on a walkway seen from a fixed, raised camera: random objects become upright
-/// walkers (a head on shoulders over a body, no rotation) whose feet lie on a band of the image, whose height
-/// follows a linear perspective (smaller higher up, nearer the horizon), who walk left or right
-/// at a constant speed drawn per person, and who are drawn in depth order by the bottom of
-/// their box (the lower the feet, the nearer the camera, the later drawn: nearer people hide
+/// walkers (a head on shoulders over a body, no rotation) whose feet lie on a band of the
+/// image, whose height follows a linear perspective (smaller higher up, nearer the horizon),
+/// who walk left or right at a constant speed drawn per person, and who are drawn in depth
+/// order by the bottom of their box (the lower the feet, the nearer the camera, the later drawn: nearer people hide
 /// farther ones). The ground truth of such a scene is also given as amodal boxes
 /// ([`SynthFrame::amodal_gt_records`](super::SynthFrame::amodal_gt_records)): the whole body's
 /// box, hidden or not, as the MOTChallenge pedestrian benchmarks annotate.

@@ -89,17 +89,10 @@ impl SynthFrame {
     /// whole silhouette, class 1, score 1, and the **visible** pixels as the mask when there
     /// are any (what a segmenter could report; the evaluation scores boxes).
     pub fn amodal_gt_records(&self) -> Vec<Record> {
-        let mut visible = self.gt.iter().peekable();
         self.silhouettes
             .iter()
             .map(|s| {
-                // Both lists are by increasing id.
-                while visible.peek().is_some_and(|g| g.id < s.id) {
-                    visible.next();
-                }
-                let mask = visible
-                    .peek()
-                    .filter(|g| g.id == s.id)
+                let mask = visible_in(&self.gt, s.id)
                     .map(|g| Rle::from_mask(&g.mask, self.width, self.height));
                 Record {
                     frame: self.index,
@@ -151,4 +144,9 @@ impl SynthFrame {
             })
             .collect()
     }
+}
+
+/// Object `id`'s entry in `gt` (by increasing id), if it is there.
+pub(super) fn visible_in(gt: &[GtObject], id: u64) -> Option<&GtObject> {
+    gt.binary_search_by_key(&id, |g| g.id).ok().map(|k| &gt[k])
 }

@@ -6,11 +6,11 @@ use super::{
     AppearanceConfig, BorderPolicy, CameraConfig, CrowdConfig, DeformConfig, MotionConfig,
     NoiseConfig, OccluderRect, OcclusionConfig, ShapeKind, SynthConfig,
 };
+use serde::{Deserialize, Serialize};
 
 /// Walkers alive at once in the [`Family::Pedestrians`] scenes: about 46 of them in view a
 /// frame, the density of the crowd issue 64 describes.
 pub const PEDESTRIANS: u32 = 51;
-use serde::{Deserialize, Serialize};
 
 /// Scenario families that stress a shape tracker, one stress each (see
 /// [`SynthConfig::family`] for their settings).
@@ -37,10 +37,10 @@ pub enum Family {
     /// frames) over a world 1.6× the frame holding 10 shapes and a bar.
     Camera,
     /// A dense crowd from a fixed, raised camera, 1920×1080 at 25 fps, 200 frames: about 46
-    /// pedestrians a frame (median visibility ~0.43) walking left and right along a walkway at their own pace, nearer
-    /// people (lower feet) hiding farther ones for long stretches; amodal ground-truth boxes
-    /// (hidden people included), visible-part masks and detections, misses rising as
-    /// visibility falls. See [`SynthConfig::pedestrians`].
+    /// pedestrians a frame (median visibility ~0.43) walking left and right along a walkway
+    /// at their own pace, nearer people (lower feet) hiding farther ones for long stretches;
+    /// amodal ground-truth boxes (hidden people included), visible-part masks and
+    /// detections, misses rising as visibility falls. See [`SynthConfig::pedestrians`].
     Pedestrians,
 }
 

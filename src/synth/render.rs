@@ -3,6 +3,7 @@
 //! noise).
 
 use super::math::{sin_cos, stream};
+use super::output::visible_in;
 use super::{GtObject, Scene, Silhouette, SENSOR_STREAM};
 use crate::frame::{BBox, Mask};
 use rand::Rng;
@@ -188,18 +189,11 @@ impl Scene {
     /// The whole silhouette of every object drawn in this frame (by increasing id), with its
     /// visibility from `gt` (0 for an object no pixel of which is visible).
     pub(super) fn silhouettes(&self, gt: &[GtObject]) -> Vec<Silhouette> {
-        let mut visible = gt.iter().peekable();
         self.objects
             .iter()
             .filter_map(|o| {
                 let [x0, y0, x1, y1] = o.drawn?;
-                while visible.peek().is_some_and(|g| g.id < o.id) {
-                    visible.next();
-                }
-                let visibility = visible
-                    .peek()
-                    .filter(|g| g.id == o.id)
-                    .map_or(0.0, |g| g.visibility);
+                let visibility = visible_in(gt, o.id).map_or(0.0, |g| g.visibility);
                 Some(Silhouette {
                     id: o.id,
                     bbox: BBox::new(x0 as f64, y0 as f64, (x1 - x0) as f64, (y1 - y0) as f64),
