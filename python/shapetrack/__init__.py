@@ -1,9 +1,10 @@
 """shapetrack: the multi-object shape tracker's Rust core, for Python.
 
 Online tracking one frame at a time (:class:`Tracker`), the offline pass over a whole video
-(:class:`OfflineTracker`), detection without weights (:func:`detect`), following one target
-from a first mask (:func:`follow`), whole sequences from files as the CLI's ``track`` does
-(:func:`track_files`), and the CLI's ``eval`` (:func:`evaluate`). Batch runs over a video
+(:class:`OfflineTracker`), the CLI's detectors (:func:`detect`, :func:`detect_files`: motion
+cues, box refinement, and the learned segmentation where its model is installed), following
+one target from a first mask (:func:`follow`), whole sequences from files as the CLI's
+``track`` does (:func:`track_files`), and the CLI's ``eval`` (:func:`evaluate`). Batch runs over a video
 library on Ray: ``python -m shapetrack.batch`` (:mod:`shapetrack.batch`).
 
 Settings are the same JSON objects as everywhere in shapetrack (the CLI's ``--config`` files,
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping, Optional, Sequence, Union
 
@@ -38,6 +40,7 @@ __all__ = [
     "Tracks",
     "Detections",
     "detect",
+    "detect_files",
     "follow",
     "track_files",
     "evaluate",
@@ -331,30 +334,85 @@ def _frames_of(frames: Any) -> Iterable[np.ndarray]:
         yield a
 
 
+def _warn(message: Optional[str]) -> None:
+    # The CLI prints the same words on stderr and goes on with the weights-free path.
+    if message:
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
+
+
+def _model_arg(model: Optional[PathLike]) -> Optional[str]:
+    if model is None:
+        return None
+    if not isinstance(model, (str, os.PathLike)):
+        raise TypeError("model: expected a path, 'none' or None")
+    return os.fspath(model)
+
+
+def _segment_arg(segment: Optional[Mapping[str, Any]]) -> Optional[str]:
+    if segment is None:
+        return None
+    if not isinstance(segment, Mapping):
+        raise TypeError("segment: expected a dict of the learned segmentation's settings")
+    return json.dumps(dict(segment))
+
+
+def _boxes_arg(boxes: Any) -> Optional[list]:
+    if boxes is None:
+        return None
+    out = []
+    for k, b in enumerate(boxes):
+        a = np.asarray(b, dtype=np.float64)
+        if a.size == 0:
+            out.append([])
+            continue
+        if a.ndim != 2 or a.shape[1] != 4:
+            raise ValueError(f"boxes[{k}]: expected shape (N, 4) (x, y, w, h), got {a.shape}")
+        out.append([tuple(r) for r in a.tolist()])
+    return out
+
+
 def detect(
     frames: Any,
     detector: Union[str, Callable[[np.ndarray], Any]] = "auto",
+    boxes: Optional[Sequence[Any]] = None,
+    model: Optional[PathLike] = None,
+    segment: Optional[Mapping[str, Any]] = None,
 ) -> list:
     """Detections of every frame, in order: a list of :class:`Detections`.
 
     ``frames``: a folder of .jpg/.png (natural order, as the CLI reads it) or an iterable of
-    H×W×3 uint8 arrays. ``detector``: ``"auto"`` (the CLI's ``auto-motion``: background
-    subtraction or the moving-camera detector, chosen from the first frames), ``"background"``,
-    ``"moving"``, or a callable ``frame -> (boxes xywh, scores[, masks])`` for your own model.
-    The learned segmentation (U²-Net-p) is the CLI's and the browser's only.
+    H×W×3 uint8 arrays. ``detector``: the CLI's ``--detector`` values, the same detectors:
+
+    - ``"auto"``: background subtraction or the moving-camera detector (chosen from how much
+      the camera moves over the first frames), each blob and each salient region of the
+      whole frame then segmented by the learned model (U²-Net-p), so objects that stand still
+      are found too; ``"refine"``: each of ``boxes`` segmented by the learned model;
+    - ``"auto-motion"``, ``"refine-colour"``: the same without the model (weights-free,
+      ~100× faster natively); ``"background"``, ``"moving"``: one motion cue;
+    - or a callable ``frame -> (boxes xywh, scores[, masks])`` for your own model.
+
+    ``boxes``: per frame, an N×4 array of x, y, w, h (``refine``; with ``auto`` too, which
+    then refines them). ``model``: the model file (u2netp.onnx), ``"none"`` for the
+    weights-free path, or ``None`` for the installed one (``$SHAPETRACK_U2NETP``, a checkout's
+    node_modules); when it is not installed, ``auto`` and ``refine`` warn
+    (``RuntimeWarning``) and go on without it, as the CLI does. ``segment``: the learned
+    segmentation's settings over its defaults (the CLI's ``--segment``).
     """
     out = []
     if callable(detector):
         for f in _frames_of(frames):
             r = detector(f)
-            boxes, scores = np.asarray(r[0], dtype=np.float64), np.asarray(r[1], dtype=np.float64)
-            n = boxes.reshape(-1, 4).shape[0]
+            bx, scores = np.asarray(r[0], dtype=np.float64), np.asarray(r[1], dtype=np.float64)
+            n = bx.reshape(-1, 4).shape[0]
             masks = np.asarray(r[2], dtype=bool) if len(r) > 2 and r[2] is not None else np.zeros((n,) + f.shape[:2], bool)
-            out.append(Detections(boxes.reshape(n, 4), scores.reshape(n), np.full(n, -1, np.int32), masks))
+            out.append(Detections(bx.reshape(n, 4), scores.reshape(n), np.full(n, -1, np.int32), masks))
         return out
     if not isinstance(detector, str):
         raise TypeError("detector: expected a name or a callable")
-    native = _native.NativeDetector(detector)
+    native = _native.NativeDetector(
+        detector, _boxes_arg(boxes), _model_arg(model), _segment_arg(segment)
+    )
+    _warn(native.warning)
     for f in _frames_of(frames):
         h, w = f.shape[:2]
         d = native.detect(np.ascontiguousarray(f).tobytes(), h, w)
@@ -369,6 +427,32 @@ def detect(
             )
         )
     return out
+
+
+def detect_files(
+    frames: PathLike,
+    out: PathLike,
+    detector: str = "auto",
+    boxes: Optional[PathLike] = None,
+    model: Optional[PathLike] = None,
+    segment: Optional[Mapping[str, Any]] = None,
+) -> dict:
+    """``shapetrack detect --frames FRAMES [--detector D] [--boxes B.txt] [--model M|none]
+    [--segment JSON] --out OUT``: the same detector over the folder, ``out`` the same MOTS
+    bytes (id -1), written atomically. ``boxes``: a MOTChallenge file. Returns ``frames``,
+    ``masks`` and ``detector`` (its name, ``+ learned segmentation`` when the model ran)."""
+    if not isinstance(detector, str):
+        raise TypeError("detector: expected one of the CLI's --detector names")
+    n, masks, name, warning = _native.detect_files(
+        os.fspath(frames),
+        os.fspath(out),
+        detector,
+        None if boxes is None else os.fspath(boxes),
+        _model_arg(model),
+        _segment_arg(segment),
+    )
+    _warn(warning)
+    return {"frames": n, "masks": masks, "detector": name}
 
 
 @dataclass
@@ -386,10 +470,13 @@ def follow(
     mask: Any,
     init_frame: int = 0,
     config: Optional[Mapping[str, Any]] = None,
+    model: Optional[PathLike] = None,
 ) -> Followed:
     """Follows one target given by ``mask`` (H×W bool) at frame ``init_frame`` (0-based),
-    forward to the end and backward to the start, without a detector (the library's
-    ``follow_sequence``). ``frames`` as in :func:`detect`; ``config`` a ``FollowConfig``."""
+    forward to the end and backward to the start, without a detector: ``shapetrack follow
+    --detector none [--model M|none]``, the same masks. ``frames`` as in :func:`detect`;
+    ``config`` a ``FollowConfig``; ``model`` as in :func:`detect` (the learned segmentation
+    re-anchors the shape when it drifts; ``"none"`` for the weights-free follower)."""
     fs = [np.ascontiguousarray(f) for f in _frames_of(frames)]
     if not fs:
         raise ValueError("frames: no frames")
@@ -414,7 +501,9 @@ def follow(
         m.astype(np.uint8).tobytes(),
         int(init_frame),
         _config_json(config),
+        _model_arg(model),
     )
+    _warn(d["warning"])
     n = len(fs)
     return Followed(
         mask=np.frombuffer(d["mask"], dtype=np.uint8).reshape(n, h, w) != 0,

@@ -1,105 +1,143 @@
-//! The weights-free detectors over frames: the CLI's `detect --detector background|moving|
-//! auto-motion` (the learned segmentation is the CLI's and the page's only; see
-//! docs/python.md).
+//! The CLI's detectors over frames (`detect --detector auto|refine|background|moving|
+//! auto-motion|refine-colour [--model PATH|none] [--segment JSON]`) and its follower: the
+//! library's [`VideoDetector`] and `follow_sequence_with_net`, with the learned segmentation
+//! (U²-Net-p through tract) when its model is installed, as in the CLI.
 
 use crate::{busy, in_pool, value_error};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use shapetrack::detect::{
-    BackgroundConfig, BackgroundSubtractor, CameraJudge, DetectError, Detector,
-    MovingCameraDetector, MovingConfig,
-};
-use shapetrack::{Detection, Frame, Mask};
+use shapetrack::detect::DetectError;
+use shapetrack::segment::{segment_settings, Learned, Net, VideoDetector, AUTO_WHOLE_FRAME};
+use shapetrack::{BBox, Detection, Frame, Mask};
 use std::sync::Mutex;
 
-/// Frames `auto` watches before choosing (the CLI's `detect::JUDGE_FRAMES`).
-const JUDGE_FRAMES: usize = 5;
+/// The network a detector owns: `Send`, so a call can release the GIL.
+type SendNet = dyn Net + Send;
 
-/// A detector run frame by frame, as the CLI's `detect` runs it.
-enum Runner {
-    /// Still deciding (auto): both detectors learn; the moving one reports.
-    Judging {
-        judge: CameraJudge,
-        background: Box<BackgroundSubtractor>,
-        moving: Box<MovingCameraDetector>,
-    },
-    /// Static camera.
-    Background(Box<BackgroundSubtractor>),
-    /// Moving camera.
-    Moving(Box<MovingCameraDetector>),
+/// The learned model as `model` names it (the CLI's `--model`): `None` the installed one
+/// (`$SHAPETRACK_U2NETP`, the checkout's node_modules), else the weights-free path with the
+/// reason returned as a warning; `"none"` the weights-free path; a path that file or an error.
+fn load_net(model: Option<&str>) -> Result<(Option<Box<SendNet>>, Option<String>), String> {
+    use shapetrack::segment::TractNet;
+    match model {
+        Some("none") => Ok((None, None)),
+        Some(p) => TractNet::load(Some(std::path::Path::new(p)))
+            .map(|n| (Some(Box::new(n) as Box<SendNet>), None))
+            .map_err(|e| format!("model: {e}")),
+        None => match TractNet::load(None) {
+            Ok(n) => Ok((Some(Box::new(n)), None)),
+            Err(e) => Ok((None, Some(format!("{e}; using the weights-free path")))),
+        },
+    }
 }
 
-fn background() -> Result<Box<BackgroundSubtractor>, DetectError> {
-    BackgroundSubtractor::new(BackgroundConfig::default()).map(Box::new)
-}
-
-fn moving() -> Result<Box<MovingCameraDetector>, DetectError> {
-    MovingCameraDetector::new(MovingConfig::default()).map(Box::new)
-}
-
-impl Runner {
-    fn detect(&mut self, frame: &Frame) -> Result<Vec<Detection>, DetectError> {
-        match self {
-            Runner::Background(d) => d.detect(frame),
-            Runner::Moving(d) => d.detect(frame),
-            Runner::Judging {
-                judge,
-                background: bg,
-                moving: mv,
-            } => {
-                judge.observe(frame);
-                bg.detect(frame)?;
-                let out = mv.detect(frame)?;
-                if judge.pairs() + 1 >= JUDGE_FRAMES {
-                    let next = if judge.moving() == Some(false) {
-                        Runner::Background(std::mem::replace(bg, background()?))
-                    } else {
-                        Runner::Moving(std::mem::replace(mv, moving()?))
-                    };
-                    *self = next;
+/// A detector as the CLI's `detect` builds it from its flags, and the warning the caller
+/// should show (the model was wanted but is not installed).
+fn build(
+    kind: &str,
+    boxes: Option<Vec<Vec<Detection>>>,
+    model: Option<&str>,
+    segment: Option<&str>,
+) -> Result<(VideoDetector<SendNet>, Option<String>), String> {
+    let (base, learned) = match kind {
+        "auto" | "auto-motion" | "refine" | "refine-colour" => {
+            let learned = matches!(kind, "auto" | "refine");
+            match boxes {
+                Some(b) => (VideoDetector::refine(b), learned),
+                None if kind.starts_with("refine") => {
+                    return Err(format!("detector: {kind:?} needs boxes"))
                 }
-                Ok(out)
+                None => (VideoDetector::auto(), learned),
             }
         }
-    }
-
-    fn name(&self) -> &'static str {
-        match self {
-            Runner::Judging { .. } => "auto (judging the camera)",
-            Runner::Background(_) => "background",
-            Runner::Moving(_) => "moving",
+        "background" | "moving" if boxes.is_some() => {
+            return Err(format!(
+                "boxes: only the detectors refine and auto take boxes, not {kind:?}"
+            ))
+        }
+        "background" => (VideoDetector::background(), false),
+        "moving" => (VideoDetector::moving(), false),
+        other => {
+            return Err(format!(
+                "detector: {other:?} is not one of auto, refine, background, moving, \
+                 auto-motion, refine-colour"
+            ))
+        }
+    };
+    let given = matches!(base, Ok(VideoDetector::Refine(..)));
+    // Checked whether or not a model runs, as the CLI does: a typo in `segment` must not pass
+    // unnoticed because this run happens not to use the model.
+    let cfg = segment_settings(segment, given).map_err(|e| format!("segment: {e}"))?;
+    let mut det = base.map_err(|e: DetectError| e.to_string())?;
+    let mut warning = None;
+    if learned {
+        let (net, w) = load_net(model)?;
+        warning = w;
+        if let Some(net) = net {
+            det = det.learned(Learned {
+                net,
+                cfg,
+                whole: AUTO_WHOLE_FRAME,
+            });
         }
     }
+    Ok((det, warning))
+}
+
+/// Per-frame boxes (x, y, w, h; score 1, class -1) as the detector takes them: index = frame
+/// number, 1-based.
+fn boxes_of(boxes: Vec<Vec<[f64; 4]>>) -> Result<Vec<Vec<Detection>>, String> {
+    let mut out = vec![Vec::new()];
+    for (k, frame) in boxes.into_iter().enumerate() {
+        if frame.len() > shapetrack::io::limits::MAX_BOXES_PER_FRAME {
+            return Err(format!(
+                "boxes[{k}]: {} boxes, more than the {} a frame takes",
+                frame.len(),
+                shapetrack::io::limits::MAX_BOXES_PER_FRAME
+            ));
+        }
+        let mut v = Vec::with_capacity(frame.len());
+        for (i, [x, y, w, h]) in frame.into_iter().enumerate() {
+            if ![x, y, w, h].iter().all(|v| v.is_finite()) || w <= 0.0 || h <= 0.0 {
+                return Err(format!(
+                    "boxes[{k}][{i}]: ({x}, {y}, {w}, {h}) is not a box (finite x, y and positive w, h)"
+                ));
+            }
+            v.push(Detection::from_box(BBox::new(x, y, w, h), 1.0));
+        }
+        out.push(v);
+    }
+    Ok(out)
 }
 
 /// A detector over a video's frames, in order (`shapetrack.detect` wraps it).
 #[pyclass(module = "shapetrack._native")]
 pub struct NativeDetector {
-    inner: Mutex<Runner>,
+    inner: Mutex<(VideoDetector<SendNet>, u32)>,
+    warning: Option<String>,
 }
 
 #[pymethods]
 impl NativeDetector {
-    /// `kind`: `auto` (= `auto-motion`: background or moving, chosen from the first frames),
-    /// `background` or `moving`.
+    /// `kind`: the CLI's `--detector` values. `boxes`: per frame, a list of (x, y, w, h)
+    /// (refine, auto). `model`: a model file, `"none"`, or `None` for the installed one.
+    /// `segment`: the learned segmentation's settings as JSON.
     #[new]
-    fn new(kind: &str) -> PyResult<Self> {
-        let r = match kind {
-            "auto" | "auto-motion" => Runner::Judging {
-                judge: CameraJudge::new(),
-                background: background().map_err(value_error)?,
-                moving: moving().map_err(value_error)?,
-            },
-            "background" => Runner::Background(background().map_err(value_error)?),
-            "moving" => Runner::Moving(moving().map_err(value_error)?),
-            other => {
-                return Err(value_error(format!(
-                    "detector: {other:?} is not one of auto, auto-motion, background, moving"
-                )))
-            }
-        };
+    #[pyo3(signature = (kind, boxes=None, model=None, segment=None))]
+    fn new(
+        py: Python<'_>,
+        kind: &str,
+        boxes: Option<Vec<Vec<[f64; 4]>>>,
+        model: Option<&str>,
+        segment: Option<&str>,
+    ) -> PyResult<Self> {
+        let boxes = boxes.map(boxes_of).transpose().map_err(value_error)?;
+        let (det, warning) = py
+            .allow_threads(|| build(kind, boxes, model, segment))
+            .map_err(value_error)?;
         Ok(Self {
-            inner: Mutex::new(r),
+            inner: Mutex::new((det, 0)),
+            warning,
         })
     }
 
@@ -113,12 +151,14 @@ impl NativeDetector {
         width: u32,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut guard = self.inner.try_lock().map_err(|_| busy("detector"))?;
-        let r: &mut Runner = &mut guard;
+        let (r, n) = &mut *guard;
         let dets = py
             .allow_threads(|| {
                 in_pool(|| -> Result<Vec<Detection>, String> {
                     let f = Frame::rgb(frame, width, height).map_err(|e| format!("frame: {e}"))?;
-                    r.detect(&f).map_err(|e| e.to_string())
+                    let dets = r.detect(*n + 1, &f).map_err(|e| e.to_string())?;
+                    *n += 1;
+                    Ok(dets)
                 })
             })
             .map_err(value_error)?;
@@ -146,10 +186,23 @@ impl NativeDetector {
         Ok(d)
     }
 
-    /// The detector running now (auto says what it chose once it has).
+    /// The detector running now (auto says what it chose once it has, and whether the
+    /// learned segmentation is on).
     #[getter]
-    fn name(&self) -> PyResult<&'static str> {
-        Ok(self.inner.try_lock().map_err(|_| busy("detector"))?.name())
+    fn name(&self) -> PyResult<String> {
+        Ok(self
+            .inner
+            .try_lock()
+            .map_err(|_| busy("detector"))?
+            .0
+            .name())
+    }
+
+    /// Why the learned segmentation is off although the detector wanted it (its model is not
+    /// installed), or `None`.
+    #[getter]
+    fn warning(&self) -> Option<String> {
+        self.warning.clone()
     }
 }
 
@@ -171,79 +224,82 @@ pub fn read_frame(py: Python<'_>, path: std::path::PathBuf) -> PyResult<(Py<PyBy
     Ok((PyBytes::new(py, img.as_raw()).unbind(), h, w))
 }
 
-/// `shapetrack detect --frames DIR --detector KIND --model none --out OUT`: every frame of the
-/// folder through the detector, masks written as MOTS txt (id -1) atomically. Returns the
-/// number of frames and of masks.
+/// `shapetrack detect --frames DIR [--detector KIND] [--boxes B.txt] [--model M|none]
+/// [--segment JSON] --out OUT`: every frame of the folder through the same detector the CLI
+/// builds, masks written as MOTS txt (id -1) atomically, the same bytes. Returns the number of
+/// frames and of masks, the detector's name and the warning the CLI would print (the model
+/// wanted but not installed), if any.
 #[pyfunction]
-#[pyo3(signature = (frames, out, detector="auto"))]
+#[pyo3(signature = (frames, out, detector="auto", boxes=None, model=None, segment=None))]
 pub fn detect_files(
     py: Python<'_>,
     frames: std::path::PathBuf,
     out: std::path::PathBuf,
     detector: &str,
-) -> PyResult<(usize, usize)> {
-    use shapetrack::io::motchallenge::write_mots;
-    use shapetrack::io::{AtomicFile, IoError, Record, Rle};
+    boxes: Option<std::path::PathBuf>,
+    model: Option<&str>,
+    segment: Option<&str>,
+) -> PyResult<(usize, usize, String, Option<String>)> {
+    use shapetrack::io::motchallenge::{detection_records, read_boxes, write_mots};
+    use shapetrack::io::{AtomicFile, IoError};
     use std::io::Write as _;
-    let runner = NativeDetector::new(detector)?;
-    let mut r = runner.inner.into_inner().map_err(|_| busy("detector"))?;
     py.allow_threads(|| {
-        in_pool(|| -> Result<(usize, usize), String> {
-            let s = |e: &dyn std::fmt::Display| e.to_string();
-            let files = shapetrack::io::image_files(&frames).map_err(|e| s(&e))?;
-            if files.is_empty() {
-                return Err(format!("{}: no .jpg/.png frames", frames.display()));
-            }
-            let mut file = AtomicFile::create(&out).map_err(|e| s(&e))?;
-            let mut masks = 0usize;
-            let mut first: Option<(u32, u32)> = None;
-            for (i, path) in files.iter().enumerate() {
-                let n = i as u32 + 1;
-                let img = shapetrack::io::read_rgb(path).map_err(|e| s(&e))?;
-                let (w, h) = img.dimensions();
-                let (fw, fh) = *first.get_or_insert((w, h));
-                if (w, h) != (fw, fh) {
-                    return Err(format!(
-                        "{}: frame is {w}x{h}, the first frame was {fw}x{fh}",
-                        path.display()
-                    ));
+        in_pool(
+            || -> Result<(usize, usize, String, Option<String>), String> {
+                let s = |e: &dyn std::fmt::Display| e.to_string();
+                let files = shapetrack::io::image_files(&frames).map_err(|e| s(&e))?;
+                if files.is_empty() {
+                    return Err(format!("{}: no .jpg/.png frames", frames.display()));
                 }
-                let frame = Frame::rgb(img.as_raw(), w, h).map_err(|e| s(&e))?;
-                let dets = r.detect(&frame).map_err(|e| format!("frame {n}: {e}"))?;
-                let recs: Vec<Record> = dets
-                    .iter()
-                    .filter_map(|d| {
-                        let m = d.mask.as_ref()?;
-                        let mut rec = Record::from_box(n, -1, d.bbox);
-                        rec.score = d.score;
-                        rec.class = d.class;
-                        rec.mask = Some(Rle::from_mask(m, w, h));
-                        Some(rec)
-                    })
-                    .collect();
-                masks += recs.len();
-                file.write_all(write_mots(&recs).as_bytes())
-                    .map_err(|source| {
-                        s(&IoError::Io {
-                            file: out.display().to_string(),
-                            source,
-                        })
-                    })?;
-            }
-            file.commit().map_err(|e| s(&e))?;
-            Ok((files.len(), masks))
-        })
+                let boxes = boxes
+                    .as_deref()
+                    .map(|p| read_boxes(p, files.len()))
+                    .transpose()
+                    .map_err(|e| s(&e))?;
+                let (mut r, warning) = build(detector, boxes, model, segment)?;
+                let mut file = AtomicFile::create(&out).map_err(|e| s(&e))?;
+                let mut masks = 0usize;
+                let mut first: Option<(u32, u32)> = None;
+                for (i, path) in files.iter().enumerate() {
+                    let n = i as u32 + 1;
+                    let img = shapetrack::io::read_rgb(path).map_err(|e| s(&e))?;
+                    let (w, h) = img.dimensions();
+                    let (fw, fh) = *first.get_or_insert((w, h));
+                    if (w, h) != (fw, fh) {
+                        return Err(format!(
+                            "{}: frame is {w}x{h}, the first frame was {fw}x{fh}",
+                            path.display()
+                        ));
+                    }
+                    let frame = Frame::rgb(img.as_raw(), w, h).map_err(|e| s(&e))?;
+                    let dets = r.detect(n, &frame).map_err(|e| format!("frame {n}: {e}"))?;
+                    let recs = detection_records(n, &dets, w, h);
+                    masks += recs.len();
+                    file.write_all(write_mots(&recs).as_bytes())
+                        .map_err(|source| {
+                            s(&IoError::Io {
+                                file: out.display().to_string(),
+                                source,
+                            })
+                        })?;
+                }
+                file.commit().map_err(|e| s(&e))?;
+                Ok((files.len(), masks, r.name(), warning))
+            },
+        )
     })
     .map_err(value_error)
 }
 
 /// Follows one target from a mask at frame `init` (0-based) through `n` frames (RGB bytes
 /// n×h×w×3), forward to the end and backward to the start, without a detector: the library's
-/// `follow::follow_sequence`. `config` is a `FollowConfig` as JSON (missing fields default).
-/// Returns `mask` u8 n×h×w, `confidence` f64 n and `lost` u8 n (bytes).
+/// `follow::follow_sequence_with_net`, as `shapetrack follow --detector none [--model M|none]`
+/// runs it. `config` is a `FollowConfig` as JSON (missing fields default); `model` as in
+/// [`NativeDetector`]. Returns `mask` u8 n×h×w, `confidence` f64 n, `lost` u8 n (bytes) and
+/// `warning` (the model wanted but not installed, or `None`).
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (frames, n, height, width, mask, init, config=None))]
+#[pyo3(signature = (frames, n, height, width, mask, init, config=None, model=None))]
 pub fn follow_frames<'py>(
     py: Python<'py>,
     frames: &[u8],
@@ -253,8 +309,9 @@ pub fn follow_frames<'py>(
     mask: &[u8],
     init: usize,
     config: Option<&str>,
+    model: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use shapetrack::follow::{follow_sequence, mask_from_bitmap, FollowConfig};
+    use shapetrack::follow::{follow_sequence_with_net, mask_from_bitmap, FollowConfig};
     let pixels = height as usize * width as usize;
     if frames.len() != n * pixels * 3 {
         return Err(value_error(format!(
@@ -270,16 +327,22 @@ pub fn follow_frames<'py>(
         .map_err(|e| value_error(format!("config: {e}")))?;
     let start = mask_from_bitmap(width, height, width, height, mask)
         .map_err(|e| value_error(format!("mask: {e}")))?;
-    let steps = py
+    let (steps, warning) = py
         .allow_threads(|| {
-            in_pool(|| -> Result<Vec<shapetrack::follow::FollowStep>, String> {
-                let views = frames
-                    .chunks_exact(pixels * 3)
-                    .map(|b| Frame::rgb(b, width, height))
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|e| format!("frames: {e}"))?;
-                follow_sequence(&views, init, &start, None, &cfg).map_err(|e| e.to_string())
-            })
+            in_pool(
+                || -> Result<(Vec<shapetrack::follow::FollowStep>, Option<String>), String> {
+                    let (mut net, warning) = load_net(model)?;
+                    let views = frames
+                        .chunks_exact(pixels * 3)
+                        .map(|b| Frame::rgb(b, width, height))
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(|e| format!("frames: {e}"))?;
+                    let net = net.as_deref_mut().map(|n| n as &mut dyn Net);
+                    follow_sequence_with_net(&views, init, &start, None, &cfg, net)
+                        .map(|s| (s, warning))
+                        .map_err(|e| e.to_string())
+                },
+            )
         })
         .map_err(value_error)?;
     let mut masks = Vec::with_capacity(n * pixels);
@@ -294,5 +357,6 @@ pub fn follow_frames<'py>(
     d.set_item("mask", PyBytes::new(py, &masks))?;
     d.set_item("confidence", PyBytes::new(py, &conf))?;
     d.set_item("lost", PyBytes::new(py, &lost))?;
+    d.set_item("warning", warning)?;
     Ok(d)
 }

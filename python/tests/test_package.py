@@ -210,12 +210,101 @@ def test_detect_equals_the_cli_weights_free_detector(cli, tmp_path):
         [str(cli), "detect", "--frames", str(frames), "--detector", "auto-motion", "--out", str(a)],
         check=True, capture_output=True,
     )
-    shapetrack._native.detect_files(str(frames), str(b), "auto")
+    r = shapetrack.detect_files(frames, b, detector="auto-motion")
     assert a.read_bytes() == b.read_bytes()
-    dets = shapetrack.detect(frames, detector="auto")
+    assert r["frames"] == 8 and "learned" not in r["detector"]
+    dets = shapetrack.detect(frames, detector="auto-motion")
     assert len(dets) == 8 and all(d.mask.shape[1:] == (480, 854) for d in dets)
     with pytest.raises(ValueError, match="detector"):
         shapetrack.detect(frames, detector="yolo")
+    with pytest.raises(ValueError, match="boxes"):
+        shapetrack.detect(frames, detector="refine")
+    with pytest.raises(ValueError, match="segment"):
+        shapetrack.detect(frames, detector="auto-motion", segment={"treshold": 0.4})
+    with pytest.raises(ValueError, match="model"):
+        shapetrack.detect(frames, detector="auto", model=tmp_path / "missing.onnx")
+
+
+def _gt_mask(k: int) -> np.ndarray:
+    ann = sorted((DAVIS / "Annotations" / "480p" / "car-shadow").iterdir())[k]
+    rgb, h, w = shapetrack._native.read_frame(str(ann))
+    return np.frombuffer(rgb, np.uint8).reshape(h, w, 3).any(axis=2)
+
+
+def _box_of(m: np.ndarray) -> list:
+    ys, xs = np.nonzero(m)
+    return [float(xs.min()), float(ys.min()), float(xs.max() - xs.min() + 1), float(ys.max() - ys.min() + 1)]
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float((a & b).sum() / max((a | b).sum(), 1))
+
+
+def test_learned_refine_equals_the_cli(cli, tmp_path):
+    # The learned segmentation (U²-Net-p through tract, installed by `npm ci`) turns given
+    # boxes into masks: the package builds the CLI's very detector, so the bytes are equal.
+    frames = _frames(tmp_path, 3)
+    boxes = [_box_of(_gt_mask(k)) for k in range(3)]
+    txt = tmp_path / "boxes.txt"
+    txt.write_text("".join(f"{k + 1},-1,{x},{y},{w},{h},1,-1,-1,-1\n" for k, (x, y, w, h) in enumerate(boxes)))
+    a, b = tmp_path / "cli.txt", tmp_path / "py.txt"
+    subprocess.run(
+        [str(cli), "detect", "--frames", str(frames), "--detector", "refine", "--boxes", str(txt), "--out", str(a)],
+        check=True, capture_output=True,
+    )
+    r = shapetrack.detect_files(frames, b, detector="refine", boxes=txt)
+    assert r["detector"] == "refine + learned segmentation", r
+    assert a.read_bytes() == b.read_bytes()
+    # In memory, boxes as arrays: the same masks, and they are the car's.
+    dets = shapetrack.detect(frames, detector="refine", boxes=[np.array([bx]) for bx in boxes])
+    for k, d in enumerate(dets):
+        assert d.mask.shape[0] == 1 and _iou(d.mask[0], _gt_mask(k)) > 0.9
+    # The weights-free refinement is another detector, with other masks.
+    c = tmp_path / "colour.txt"
+    shapetrack.detect_files(frames, c, detector="refine", boxes=txt, model="none")
+    assert c.read_bytes() != a.read_bytes()
+
+
+def _rle_decode(s: str, h: int, w: int) -> np.ndarray:
+    """A pycocotools-compressed RLE string (MOTS) as an h×w bool mask."""
+    counts, p = [], 0
+    while p < len(s):
+        x, k, more = 0, 0, True
+        while more:
+            c = ord(s[p]) - 48
+            x |= (c & 0x1F) << (5 * k)
+            more = bool(c & 0x20)
+            p, k = p + 1, k + 1
+            if not more and c & 0x10:
+                x |= -1 << (5 * k)
+        if len(counts) > 2:
+            x += counts[-2]
+        counts.append(x)
+    flat = np.zeros(h * w, bool)
+    pos = 0
+    for i, c in enumerate(counts):
+        flat[pos:pos + c] = i % 2 == 1
+        pos += c
+    return flat.reshape(w, h).T
+
+
+@pytest.mark.parametrize("model", [None, "none"])
+def test_follow_equals_the_cli(cli, tmp_path, model):
+    # From the second frame's mask, forward and backward: `shapetrack follow --detector none`
+    # with its learned model (the default) and without (`--model none`).
+    frames = _frames(tmp_path, 4)
+    ann = sorted((DAVIS / "Annotations" / "480p" / "car-shadow").iterdir())[1]
+    out = tmp_path / "cli.txt"
+    cmd = [str(cli), "follow", "--frames", str(frames), "--init", str(ann), "--init-frame", "2",
+           "--detector", "none", "--out", str(out)]
+    subprocess.run(cmd + (["--model", model] if model else []), check=True, capture_output=True)
+    f = shapetrack.follow(frames, _gt_mask(1), init_frame=1, model=model)
+    cli_masks = np.zeros_like(f.mask)
+    for line in out.read_text().splitlines():
+        fr, _id, _cls, h, w, rle = line.split(" ", 5)
+        cli_masks[int(fr) - 1] = _rle_decode(rle, int(h), int(w))
+    assert cli_masks.any(axis=(1, 2)).all()
+    assert np.array_equal(cli_masks, f.mask)
 
 
 def test_follow_keeps_the_target(tmp_path):

@@ -31,7 +31,7 @@ mod warp;
 
 pub use config::{FollowConfig, FollowError};
 pub use interpolate::{interpolate_masks, InterpolateError};
-pub use sequence::{follow_sequence, mask_from_bitmap};
+pub use sequence::{follow_sequence, follow_sequence_with_net, mask_from_bitmap};
 use warp::within_reach;
 pub use warp::{rasterize_polygon, warp_mask};
 

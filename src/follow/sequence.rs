@@ -3,6 +3,7 @@
 
 use super::{FollowConfig, FollowError, FollowStep, Follower};
 use crate::frame::{Detection, Frame, Mask};
+use crate::segment::Net;
 
 /// A mask from a full-frame bitmap, checked against the frame size and for emptiness.
 pub fn mask_from_bitmap(
@@ -37,6 +38,20 @@ pub fn follow_sequence(
     mask: &Mask,
     detections: Option<&[Vec<Detection>]>,
     cfg: &FollowConfig,
+) -> Result<Vec<FollowStep>, FollowError> {
+    follow_sequence_with_net(frames, init, mask, detections, cfg, None)
+}
+
+/// [`follow_sequence`] with the learned segmentation run by `net` on each frame's
+/// [`Follower::learned_crop`] ([`Follower::step_with_net`]), as `shapetrack follow` runs it
+/// with its model installed; `None` is [`follow_sequence`].
+pub fn follow_sequence_with_net(
+    frames: &[Frame<'_>],
+    init: usize,
+    mask: &Mask,
+    detections: Option<&[Vec<Detection>]>,
+    cfg: &FollowConfig,
+    mut net: Option<&mut dyn Net>,
 ) -> Result<Vec<FollowStep>, FollowError> {
     if frames.is_empty() {
         return Err(FollowError::NoFrames);
@@ -80,13 +95,17 @@ pub fn follow_sequence(
     });
     let no_dets: Vec<Detection> = Vec::new();
     let dets = |i: usize| detections.map_or(&no_dets[..], |d| &d[i][..]);
+    let mut step = |f: &mut Follower, i: usize| match net.as_deref_mut() {
+        Some(n) => f.step_with_net(&frames[i], dets(i), n),
+        None => f.step(&frames[i], dets(i)),
+    };
     let mut fwd = first.clone();
-    for i in init + 1..frames.len() {
-        out[i] = Some(fwd.step(&frames[i], dets(i))?);
+    for (i, slot) in out.iter_mut().enumerate().skip(init + 1) {
+        *slot = Some(step(&mut fwd, i)?);
     }
     let mut back = first;
-    for i in (0..init).rev() {
-        out[i] = Some(back.step(&frames[i], dets(i))?);
+    for (i, slot) in out.iter_mut().enumerate().take(init).rev() {
+        *slot = Some(step(&mut back, i)?);
     }
     Ok(out.into_iter().flatten().collect())
 }

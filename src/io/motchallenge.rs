@@ -5,7 +5,9 @@
 //! TrackEval we accept commas or whitespace as separators, CRLF, blank lines and extra fields.
 //! MOTS lines are `frame id class height width rle` with a pycocotools-compressed RLE.
 
-use super::limits::{id_ok, image_size_ok, ID_EXPECTED, MAX_FRAME, MAX_PIXELS, MAX_SIDE};
+use super::limits::{
+    id_ok, image_size_ok, ID_EXPECTED, MAX_BOXES_PER_FRAME, MAX_FRAME, MAX_PIXELS, MAX_SIDE,
+};
 use super::{IoError, Record, RecordFlags, Rle};
 use crate::frame::BBox;
 use std::fmt::Write as _;
@@ -174,6 +176,52 @@ pub fn parse_mot_line(
     }))
 }
 
+/// Reads MOTChallenge boxes into per-frame detections (index = frame number, 1-based; index 0
+/// stays empty): the boxes `shapetrack detect --boxes` refines into masks. A box for a frame
+/// the video does not have (beyond its `frames` frames) is an error naming its line: it would
+/// never be refined, and the output would lose it without a word. A frame of more than
+/// [`MAX_BOXES_PER_FRAME`] boxes (the tracker's cap) is an error naming the first line over
+/// it: the refiner's work per frame would follow the file's claim.
+pub fn read_boxes(
+    path: &std::path::Path,
+    frames: usize,
+) -> Result<Vec<Vec<crate::frame::Detection>>, IoError> {
+    let file = path.display().to_string();
+    let text = super::read_text(path)?;
+    let mut out = vec![Vec::new(); frames + 1];
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let Some(r) = parse_mot_line(raw, &file, line, MotReadOptions::default())? else {
+            continue;
+        };
+        let Some(v) = out.get_mut(r.frame as usize) else {
+            return Err(IoError::Invalid {
+                file,
+                line,
+                message: format!(
+                    "a box for frame {}, but the frame folder holds {frames} frames",
+                    r.frame
+                ),
+            });
+        };
+        if v.len() == MAX_BOXES_PER_FRAME {
+            return Err(IoError::Invalid {
+                file,
+                line,
+                message: format!(
+                    "frame {} holds more than {MAX_BOXES_PER_FRAME} boxes, the most per \
+                     frame the tracker and the refiner take (src/io/limits.rs)",
+                    r.frame
+                ),
+            });
+        }
+        let mut d = crate::frame::Detection::from_box(r.bbox, r.score);
+        d.class = r.class;
+        v.push(d);
+    }
+    Ok(out)
+}
+
 /// Writes records as MOTChallenge txt, `frame,id,x,y,w,h,conf,-1,-1,-1` per line, sorted by
 /// frame then id. Numbers use the shortest text that reads back to the same `f64`.
 pub fn write_mot(records: &[Record]) -> String {
@@ -289,6 +337,26 @@ pub fn parse_mots_line(raw: &str, file: &str, ln: usize) -> Result<Option<Record
         mask: Some(rle),
         flags: RecordFlags::default(),
     }))
+}
+
+/// MOTS records of one frame's detections with masks (frame `n`, id -1: detections carry no
+/// identity; box-only detections are left out): the lines `shapetrack detect` writes.
+pub fn detection_records(
+    n: u32,
+    dets: &[crate::frame::Detection],
+    width: u32,
+    height: u32,
+) -> Vec<Record> {
+    dets.iter()
+        .filter_map(|d| {
+            let m = d.mask.as_ref()?;
+            let mut r = Record::from_box(n, -1, d.bbox);
+            r.score = d.score;
+            r.class = d.class;
+            r.mask = Some(Rle::from_mask(m, width, height));
+            Some(r)
+        })
+        .collect()
 }
 
 /// Writes records that carry masks as MOTS txt, sorted by frame then id. Records without a
@@ -507,5 +575,36 @@ mod tests {
         };
         assert_eq!(SeqInfo::parse(&s.to_ini(), "s").unwrap(), s);
         assert!(SeqInfo::parse("[Sequence]\nframeRate=x\nseqLength=3\n", "s").is_err());
+    }
+
+    /// `--boxes` takes at most the tracker's boxes per frame: the refiner's work per frame
+    /// follows the file's claim otherwise. The error names the file and the first line over.
+    #[test]
+    fn boxes_beyond_the_per_frame_cap_are_refused_with_their_line() {
+        let dir = std::env::temp_dir().join(format!("st-boxes-cap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("boxes.txt");
+        let mut text = String::from("1,-1,5,5,10,10,0.9,-1,-1,-1\n");
+        for k in 0..=MAX_BOXES_PER_FRAME {
+            text.push_str(&format!("2,-1,{k},5,10,10,0.9,-1,-1,-1\n"));
+        }
+        std::fs::write(&path, &text).unwrap();
+        let e = read_boxes(&path, 3).unwrap_err().to_string();
+        let line = MAX_BOXES_PER_FRAME + 2;
+        assert!(e.contains(&format!("boxes.txt:{line}:")), "{e}");
+        assert!(e.contains("frame 2"), "{e}");
+        // At the cap it is read.
+        let at_cap: String = text
+            .lines()
+            .take(line - 1)
+            .map(|l| format!("{l}\n"))
+            .collect();
+        std::fs::write(&path, at_cap).unwrap();
+        assert_eq!(read_boxes(&path, 3).unwrap()[2].len(), MAX_BOXES_PER_FRAME);
+        // A box beyond the video's frames names its line too.
+        std::fs::write(&path, "4,-1,5,5,10,10,0.9,-1,-1,-1\n").unwrap();
+        let e = read_boxes(&path, 3).unwrap_err().to_string();
+        assert!(e.contains("boxes.txt:1:") && e.contains("frame 4"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

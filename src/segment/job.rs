@@ -280,7 +280,7 @@ impl Job {
     }
 
     /// Runs every pending crop through `net` (the synchronous case).
-    pub fn run(&mut self, frame: &Frame, net: &mut dyn Net) -> Result<(), SegmentError> {
+    pub fn run<N: Net + ?Sized>(&mut self, frame: &Frame, net: &mut N) -> Result<(), SegmentError> {
         let mut input = Vec::new();
         while let Some(side) = self.pending_side() {
             input.resize(super::input_len(side), 0.0);

@@ -28,11 +28,12 @@
 //!
 //! Speed: frames per second of each detector's own work (decoding excluded), one thread.
 
-use crate::detect::{Kind, Learned, ModelChoice, Runner, AUTO_WHOLE_FRAME};
+use crate::detect::{runner, Kind, ModelChoice, Runner};
 use crate::netcache::{CachedNet, SharedNet};
 use shapetrack::detect::{refine_box, MovingCameraDetector, MovingConfig, RefineConfig};
 use shapetrack::io::{image_files, read_rgb, IoError};
 use shapetrack::segment::{Job, SegmentConfig, WholeFrame};
+use shapetrack::segment::{Learned, AUTO_WHOLE_FRAME};
 use shapetrack::{Detection, Frame, Mask};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -228,14 +229,12 @@ fn score(
     frames: &mut Vec<(usize, f64)>,
 ) -> Result<Score, Box<dyn std::error::Error>> {
     let mut runner = match m {
-        Method::Background => Some(Runner::new(Kind::Background, None)?),
+        Method::Background => Some(runner(Kind::Background, None)?),
         Method::Moving => Some(Runner::Moving(Box::new(MovingCameraDetector::new(
             ctx.moving.clone(),
         )?))),
-        Method::AutoMotion => Some(Runner::new(Kind::Auto, None)?),
-        Method::Auto => {
-            Some(Runner::new(Kind::Auto, None)?.learned(ctx.learned(AUTO_WHOLE_FRAME)?))
-        }
+        Method::AutoMotion => Some(runner(Kind::Auto, None)?),
+        Method::Auto => Some(runner(Kind::Auto, None)?.learned(ctx.learned(AUTO_WHOLE_FRAME)?)),
         _ => None,
     };
     let mut net = match m {

@@ -7,7 +7,7 @@
 //! long folder, for `follow` and for `vot` (which decodes a frame each time one of its runs
 //! reaches it rather than holding the sequence).
 
-use crate::detect::{Kind, ModelChoice, Runner};
+use crate::detect::{runner, Kind, ModelChoice, Runner};
 use crate::netcache::{CachedNet, SharedNet};
 use image::RgbImage;
 use shapetrack::eval::vot::{anchors_every, run_anchor_protocol, run_reset_protocol};
@@ -140,7 +140,7 @@ impl Travel {
         let detector = match kind {
             DetectorKind::None => None,
             DetectorKind::Auto => {
-                let mut d = Runner::new(Kind::Auto, None)?;
+                let mut d = runner(Kind::Auto, None)?;
                 d.detect(0, frame)?;
                 Some(d)
             }

@@ -1,0 +1,195 @@
+//! A detector chosen at run time and run over a video's frames in order, with the learned
+//! segmentation optionally on top: what `shapetrack detect` runs, and the Python package's
+//! `detect` with it (one implementation, so the two give the same masks bit for bit).
+
+use super::{Job, Net, SegmentConfig, SegmentError, WholeFrame};
+use crate::detect::{
+    BackgroundConfig, BackgroundSubtractor, BoxRefiner, CameraJudge, DetectError, Detector,
+    MovingCameraDetector, MovingConfig, RefineConfig,
+};
+use crate::frame::{Detection, Frame};
+
+/// Frames the automatic choice watches before deciding between a static and a moving camera.
+pub const JUDGE_FRAMES: usize = 5;
+
+/// The automatic detector's whole-frame pass with the learned model (chosen on the 21 DAVIS
+/// clips, `tests/data/detect/README.md`): salient regions no motion blob covers are segmented
+/// too, so objects that stand still get masks.
+pub const AUTO_WHOLE_FRAME: WholeFrame = WholeFrame::Proposals;
+
+/// The learned segmentation's settings as `shapetrack detect --segment JSON` gives them: the
+/// JSON's fields over the defaults, a crop around a given box (`boxes`) at
+/// [`super::BOX_SIDE`] (as in the page) unless the JSON sets `side`. Checked; the error is the
+/// JSON's or the setting's message.
+pub fn segment_settings(json: Option<&str>, boxes: bool) -> Result<SegmentConfig, String> {
+    let base = if boxes {
+        SegmentConfig::default().for_boxes()
+    } else {
+        SegmentConfig::default()
+    };
+    let cfg = match json {
+        Some(j) => {
+            let v = serde_json::from_str(j).map_err(|e| e.to_string())?;
+            crate::settings::overlay(&base, &v).map_err(|e| e.to_string())?
+        }
+        None => base,
+    };
+    cfg.validate().map_err(|e| e.to_string())?;
+    Ok(cfg)
+}
+
+/// The learned stage of a [`VideoDetector`]: the network and its settings. `N` is the
+/// network's type (`dyn Net`, or `dyn Net + Send` where the detector crosses threads).
+pub struct Learned<N: Net + ?Sized = dyn Net> {
+    /// The network.
+    pub net: Box<N>,
+    /// Its settings.
+    pub cfg: SegmentConfig,
+    /// Whole-frame pass (boxes given by the caller never get one).
+    pub whole: WholeFrame,
+}
+
+/// A weights-free detector, or one of them with the learned segmentation on top.
+pub enum VideoDetector<N: Net + ?Sized = dyn Net> {
+    /// Still deciding (the automatic detector's first [`JUDGE_FRAMES`] frames): both
+    /// detectors learn; the moving one reports.
+    Judging {
+        /// Watches how much the camera moves.
+        judge: CameraJudge,
+        /// The static-camera detector, learning its background meanwhile.
+        background: Box<BackgroundSubtractor>,
+        /// The moving-camera detector, whose detections are reported meanwhile.
+        moving: Box<MovingCameraDetector>,
+    },
+    /// Static camera: the thesis' adaptive background subtractor.
+    Background(Box<BackgroundSubtractor>),
+    /// Moving camera: motion-compensated background subtraction with box refinement.
+    Moving(Box<MovingCameraDetector>),
+    /// Box refinement; the boxes of every frame, index = frame number (1-based; 0 unused).
+    Refine(BoxRefiner, Vec<Vec<Detection>>),
+    /// A weights-free detector whose detections (or given boxes) the learned model segments.
+    Learned(Box<VideoDetector<N>>, Box<Learned<N>>),
+}
+
+fn background() -> Result<Box<BackgroundSubtractor>, DetectError> {
+    BackgroundSubtractor::new(BackgroundConfig::default()).map(Box::new)
+}
+
+fn moving() -> Result<Box<MovingCameraDetector>, DetectError> {
+    MovingCameraDetector::new(MovingConfig::default()).map(Box::new)
+}
+
+fn segment_error(e: SegmentError) -> DetectError {
+    DetectError::Refine {
+        reason: format!("learned segmentation: {e}"),
+    }
+}
+
+impl<N: Net + ?Sized> VideoDetector<N> {
+    /// The automatic detector: background subtraction or the moving-camera detector, chosen
+    /// from how much the camera moves over the first [`JUDGE_FRAMES`] frames.
+    pub fn auto() -> Result<Self, DetectError> {
+        Ok(VideoDetector::Judging {
+            judge: CameraJudge::new(),
+            background: background()?,
+            moving: moving()?,
+        })
+    }
+
+    /// The static-camera background subtractor.
+    pub fn background() -> Result<Self, DetectError> {
+        Ok(VideoDetector::Background(background()?))
+    }
+
+    /// The moving-camera detector.
+    pub fn moving() -> Result<Self, DetectError> {
+        Ok(VideoDetector::Moving(moving()?))
+    }
+
+    /// Refinement of given boxes into masks; `boxes[n]` holds frame `n`'s (1-based).
+    pub fn refine(boxes: Vec<Vec<Detection>>) -> Result<Self, DetectError> {
+        Ok(VideoDetector::Refine(
+            BoxRefiner::new(RefineConfig::default())?,
+            boxes,
+        ))
+    }
+
+    /// `self` with the learned stage on top.
+    pub fn learned(self, learned: Learned<N>) -> Self {
+        VideoDetector::Learned(Box::new(self), Box::new(learned))
+    }
+
+    /// Lets the detector learn from frame `n` without asking for its detections (the learned
+    /// stage does not run): an evaluation that scores every Nth frame keeps a background
+    /// model as current as a full run would.
+    pub fn observe(&mut self, n: u32, frame: &Frame) -> Result<(), DetectError> {
+        match self {
+            VideoDetector::Learned(base, _) => base.observe(n, frame),
+            VideoDetector::Refine(..) => Ok(()),
+            _ => self.detect(n, frame).map(|_| ()),
+        }
+    }
+
+    /// The name of the detector running now (the automatic one says what it chose once it
+    /// has).
+    pub fn name(&self) -> String {
+        match self {
+            VideoDetector::Judging { .. } => "auto (judging the camera)".into(),
+            VideoDetector::Background(_) => "background".into(),
+            VideoDetector::Moving(_) => "moving".into(),
+            VideoDetector::Refine(..) => "refine".into(),
+            VideoDetector::Learned(base, _) => format!("{} + learned segmentation", base.name()),
+        }
+    }
+
+    /// The detections of frame `n` (1-based; it picks the frame's boxes for refinement).
+    pub fn detect(&mut self, n: u32, frame: &Frame) -> Result<Vec<Detection>, DetectError> {
+        match self {
+            VideoDetector::Learned(base, learned) => {
+                let Learned { net, cfg, whole } = &mut **learned;
+                if let VideoDetector::Refine(r, boxes) = &mut **base {
+                    // Boxes: the model first; the colour refinement for those it finds
+                    // nothing in (they are still box-only).
+                    let b = boxes.get(n as usize).cloned().unwrap_or_default();
+                    let mut job = Job::new(frame.width(), frame.height(), b, WholeFrame::Off, cfg)
+                        .map_err(segment_error)?;
+                    job.run(frame, &mut **net).map_err(segment_error)?;
+                    let mut dets = job.finish().detections;
+                    r.refine_all(frame, &mut dets, None)?;
+                    return Ok(dets);
+                }
+                let dets = base.detect(n, frame)?;
+                let mut job = Job::new(frame.width(), frame.height(), dets, *whole, cfg)
+                    .map_err(segment_error)?;
+                job.run(frame, &mut **net).map_err(segment_error)?;
+                Ok(job.finish().detections)
+            }
+            VideoDetector::Background(d) => d.detect(frame),
+            VideoDetector::Moving(d) => d.detect(frame),
+            VideoDetector::Refine(r, boxes) => {
+                let b = boxes.get(n as usize).cloned().unwrap_or_default();
+                r.set_boxes(b);
+                r.detect(frame)
+            }
+            VideoDetector::Judging {
+                judge,
+                background: bg,
+                moving: mv,
+            } => {
+                judge.observe(frame);
+                bg.detect(frame)?;
+                let out = mv.detect(frame)?;
+                if judge.pairs() + 1 >= JUDGE_FRAMES {
+                    // The chosen detector keeps what it learned; the other is dropped.
+                    let next = if judge.moving() == Some(false) {
+                        VideoDetector::Background(std::mem::replace(bg, background()?))
+                    } else {
+                        VideoDetector::Moving(std::mem::replace(mv, moving()?))
+                    };
+                    *self = next;
+                }
+                Ok(out)
+            }
+        }
+    }
+}
