@@ -383,3 +383,58 @@ fn a_second_scoring_reuses_the_cheap_terms_and_scores_alike() {
     assert_eq!(cheap_calls.swap(0, Ordering::Relaxed), 3);
     assert_eq!(third, m.score_pairs(&tracks, &cands, &fewer));
 }
+
+/// The direction term reads where the track was going from its own observations: a
+/// detection further along costs little, one back where it came from costs nearly 1, and a
+/// track that has not moved, or a detection on top of its older observation, has no data.
+#[test]
+fn direction_follows_the_observed_travel() {
+    use crate::track::estimate::NoiseFit;
+    use crate::track::Config;
+    let cfg = Config::default();
+    let mut fit = NoiseFit::default();
+    let mut t = track_at_x(0.0);
+    let term = DirectionCost { span: 3 };
+    let det_at = |x: f64, y: f64| Detection::from_box(BBox::new(x, y, 40.0, 80.0), 1.0);
+    let cost = |t: &Track, d: &Detection| {
+        term.cost(
+            t,
+            &Candidate {
+                index: 0,
+                detection: d,
+                features: None,
+            },
+        )
+    };
+    // One observation: no direction yet.
+    assert_eq!(cost(&t, &det_at(40.0, 0.0)), None);
+    // Walking right 8 px a frame over frames 2–4.
+    for f in 2..=4u32 {
+        let d = det_at(8.0 * (f - 1) as f64, 0.0);
+        t.hit(&d, &Features::default(), f, &cfg, false, &mut fit)
+            .unwrap();
+    }
+    let (u, from) = t.observed_direction(3).unwrap();
+    assert!((u.x - 1.0).abs() < 1e-9 && u.y.abs() < 1e-9, "{u:?}");
+    assert!(
+        (from.x - 20.0).abs() < 1e-9,
+        "from the first observation: {from:?}"
+    );
+    let ahead = cost(&t, &det_at(40.0, 0.0)).unwrap();
+    let back = cost(&t, &det_at(-30.0, 0.0)).unwrap();
+    let aside = cost(&t, &det_at(0.0, 40.0)).unwrap();
+    assert!(ahead < 0.01, "{ahead}");
+    assert!(back > 0.99, "{back}");
+    assert!((aside - 0.5).abs() < 1e-9, "square to the travel: {aside}");
+    // On top of the older observation: no direction to compare.
+    assert_eq!(cost(&t, &det_at(1.0, 0.0)), None);
+    // A track standing still has no direction.
+    let mut still = track_at_x(100.0);
+    for f in 2..=4u32 {
+        let d = det_at(100.0 + 0.5 * (f % 2) as f64, 0.0);
+        still
+            .hit(&d, &Features::default(), f, &cfg, false, &mut fit)
+            .unwrap();
+    }
+    assert_eq!(still.observed_direction(3), None);
+}

@@ -56,6 +56,7 @@ pub mod regions;
 pub mod scores;
 mod search;
 pub mod sequence;
+mod terms;
 mod timing;
 pub mod usable;
 
