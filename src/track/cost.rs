@@ -14,7 +14,7 @@
 
 use super::config::Terms;
 use super::features::Features;
-use super::lifecycle::{Track, OBSERVED};
+use super::lifecycle::Track;
 use super::regions::Regions;
 use crate::frame::{BBox, Detection};
 
@@ -203,33 +203,6 @@ impl PairCost for MahalanobisCost {
     }
 }
 
-/// Velocity direction consistency ([`super::Terms::direction`]): the angle over π between the
-/// track's observed direction of travel and the direction from the same older observation to
-/// the detection.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DirectionCost {
-    /// Frames back from the track's last observation its direction is measured over.
-    pub span: u32,
-}
-
-impl PairCost for DirectionCost {
-    fn name(&self) -> &str {
-        "direction"
-    }
-    fn cost(&self, track: &Track, det: &Candidate<'_>) -> Option<f64> {
-        let (u, from) = track.observed_direction(self.span)?;
-        let c = det.detection.bbox.center();
-        let (dx, dy) = (c.x - from.x, c.y - from.y);
-        let n = dx.hypot(dy);
-        // Too near to say where it went: within a twentieth of its height.
-        if !(n.is_finite() && n > 0.05 * det.detection.bbox.h.max(1.0)) {
-            return None;
-        }
-        let cos = ((dx * u.x + dy * u.y) / n).clamp(-1.0, 1.0);
-        Some(cos.acos() / std::f64::consts::PI)
-    }
-}
-
 /// `1 − mask IoU` between the track's last mask, moved by the predicted displacement, and the
 /// detection's mask. No data unless both have masks.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -345,13 +318,6 @@ impl CostModel {
             }),
             t.mahalanobis.weight,
             t.mahalanobis.gate,
-        );
-        m.push(
-            Box::new(DirectionCost {
-                span: t.direction.scale.round().clamp(1.0, OBSERVED as f64) as u32,
-            }),
-            t.direction.weight,
-            t.direction.gate,
         );
         m.push(Box::new(MaskIouCost), t.mask_iou.weight, t.mask_iou.gate);
         m

@@ -16,9 +16,6 @@ use crate::motion::{BoxMotionModel, MotionError, MotionModel};
 /// The boxed motion filter a track owns (any [`MotionModel`] on boxes).
 pub(crate) type BoxMotion = Box<dyn BoxMotionModel>;
 
-/// Observations a track keeps for its direction of travel ([`Track::observed_direction`]).
-pub(crate) const OBSERVED: usize = 6;
-
 /// A track moving more than this fraction of its size per frame is fast: its search shell is
 /// swept along the predicted displacement, so a detection found part-way still meets it.
 const FAST_MOTION: f64 = 0.5;
@@ -114,9 +111,6 @@ pub struct Track {
     last_frame: u32,
     /// The last matched detection.
     last: Detection,
-    /// Frames and box centres of the last [`OBSERVED`] matches (the whole shape's box with
-    /// amodal completion), oldest first: the track's direction of travel as observed.
-    observed: std::collections::VecDeque<(u32, Point)>,
     /// Its features (centroid, area, shell, appearance when described).
     features: Option<Features>,
     /// Last frame a shape was reported under the track's id (matched or coasted).
@@ -301,7 +295,6 @@ impl Track {
             misses: 0,
             last_frame: frame,
             last: det.clone(),
-            observed: std::collections::VecDeque::from([(frame, b.center())]),
             features: Some(features.clone()),
             pending: Vec::new(),
             estimate: smooth.then(|| BoxEstimate::new(&b)),
@@ -338,33 +331,6 @@ impl Track {
         if let Some(e) = &mut self.estimate {
             e.translate(dx, dy);
         }
-        for (_, p) in &mut self.observed {
-            *p = Point::new(p.x + dx, p.y + dy);
-        }
-    }
-
-    /// The track's direction of travel as observed (OC-SORT's observation-centric momentum,
-    /// free of the filter's lag through an occlusion): the unit vector from its newest
-    /// observation at least `span` frames before the last (else its oldest kept) to its last,
-    /// with that older observation's centre (a detection's direction is measured from it too,
-    /// over as many frames: one frame's step is mostly the boxes' jitter). `None` with one observation, or when the shape
-    /// moved less than a twentieth of its height between the two (standing still: no
-    /// direction to keep).
-    pub fn observed_direction(&self, span: u32) -> Option<(Point, Point)> {
-        let &(last_frame, last) = self.observed.back()?;
-        let (_, from) = self
-            .observed
-            .iter()
-            .rev()
-            .skip(1)
-            .find(|(f, _)| f.saturating_add(span) <= last_frame)
-            .or_else(|| self.observed.iter().rev().nth(1).and(self.observed.front()))?;
-        let (dx, dy) = (last.x - from.x, last.y - from.y);
-        let n = dx.hypot(dy);
-        if !(n.is_finite() && n > 0.05 * self.ref_size.1.max(1.0)) {
-            return None;
-        }
-        Some((Point::new(dx / n, dy / n), *from))
     }
 
     /// A match in tracker frame `frame` with detection `det` (and its `features`): the motion
@@ -450,10 +416,6 @@ impl Track {
         self.hits += 1;
         self.misses = 0;
         self.last_frame = frame;
-        if self.observed.len() == OBSERVED {
-            self.observed.pop_front();
-        }
-        self.observed.push_back((frame, z.center()));
         self.last = det.clone();
         self.features = Some(features.clone());
         Ok(())

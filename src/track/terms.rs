@@ -74,15 +74,6 @@ pub struct Terms {
     /// Squared Mahalanobis distance under the Kalman innovation covariance, over `scale`
     /// (χ² units; 9.4877 is the 95 % point for 4 degrees of freedom), clipped to 1.
     pub mahalanobis: TermConfig,
-    /// Velocity direction consistency (OC-SORT's observation-centric momentum): the angle,
-    /// over π, between the track's direction of travel from its own observations (the newest
-    /// one at least `scale` frames before its last, to its last) and the direction from that
-    /// older observation to the detection. Two walkers crossing in opposite directions swap
-    /// identities where their boxes overlap; this term tells them apart by where each was
-    /// going. No data for a track that has not moved (a twentieth of its height over the
-    /// span) or a detection too near that observation to give a direction. Default weight 0,
-    /// scale 3 (frames, 1–6).
-    pub direction: TermConfig,
     /// `1 − mask IoU` between the track's last mask moved by its predicted motion and the
     /// detection's mask; no data in box mode. Default weight 1.
     pub mask_iou: TermConfig,
@@ -121,11 +112,6 @@ impl Default for Terms {
                 gate: None,
                 scale: crate::motion::CHI2_95_4DOF,
             },
-            direction: TermConfig {
-                weight: 0.0,
-                gate: None,
-                scale: 3.0,
-            },
             mask_iou: TermConfig::weighted(1.0),
             shape_context: TermConfig::weighted(0.5),
             colour: TermConfig::weighted(0.5),
@@ -149,7 +135,7 @@ impl Terms {
     }
 
     /// Every term with its name, in a fixed order.
-    pub fn named(&self) -> [(&'static str, &TermConfig); 12] {
+    pub fn named(&self) -> [(&'static str, &TermConfig); 11] {
         [
             ("iou", &self.iou),
             ("last_iou", &self.last_iou),
@@ -158,7 +144,6 @@ impl Terms {
             ("centre", &self.centre),
             ("size", &self.size),
             ("mahalanobis", &self.mahalanobis),
-            ("direction", &self.direction),
             ("mask_iou", &self.mask_iou),
             ("shape_context", &self.shape_context),
             ("colour", &self.colour),
