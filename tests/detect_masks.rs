@@ -10,6 +10,7 @@ use shapetrack::detect::{
 };
 use shapetrack::io::motchallenge::parse_mots;
 use shapetrack::io::read_text;
+use shapetrack::segment::VideoDetectorKind;
 use shapetrack::{BBox, Frame, Mask};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -545,4 +546,47 @@ fn cli_bad_inputs_fail_cleanly() {
     let out = detect(&["--frames", s(&d.join("missing")), "--out", s(&out_path)]);
     assert_clean_failure(&out, "missing folder");
     assert!(!out_path.exists(), "nothing written on failure");
+}
+
+#[test]
+fn a_detector_is_chosen_by_kind_and_boxes() {
+    use shapetrack::segment::{ChoiceError, VideoDetector};
+    type D = VideoDetector;
+    let boxes = || Some(vec![Vec::new(), Vec::new()]);
+    for (name, kind) in VideoDetectorKind::ALL {
+        assert_eq!(VideoDetectorKind::parse(name), Some(kind));
+        assert_eq!(
+            kind.wants_model(),
+            matches!(name, "auto" | "refine"),
+            "{name}"
+        );
+    }
+    assert_eq!(VideoDetectorKind::parse("Auto"), None);
+    // With boxes, every refining kind (the automatic ones too) refines them.
+    for kind in [
+        VideoDetectorKind::Auto,
+        VideoDetectorKind::AutoMotion,
+        VideoDetectorKind::Refine,
+        VideoDetectorKind::RefineColour,
+    ] {
+        assert_eq!(D::choose(kind, boxes()).unwrap().name(), "refine");
+    }
+    assert!(matches!(
+        D::choose(VideoDetectorKind::Refine, None),
+        Err(ChoiceError::RefineWithoutBoxes)
+    ));
+    assert!(matches!(
+        D::choose(VideoDetectorKind::Background, boxes()),
+        Err(ChoiceError::BoxesNotUsed)
+    ));
+    assert_eq!(
+        D::choose(VideoDetectorKind::AutoMotion, None)
+            .unwrap()
+            .name(),
+        "auto (judging the camera)"
+    );
+    assert_eq!(
+        D::choose(VideoDetectorKind::Moving, None).unwrap().name(),
+        "moving"
+    );
 }

@@ -6,8 +6,9 @@
 use crate::{busy, in_pool, value_error};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use shapetrack::detect::DetectError;
-use shapetrack::segment::{segment_settings, Learned, Net, VideoDetector, AUTO_WHOLE_FRAME};
+use shapetrack::segment::{
+    segment_settings, ChoiceError, Learned, Net, VideoDetector, VideoDetectorKind, AUTO_WHOLE_FRAME,
+};
 use shapetrack::{BBox, Detection, Frame, Mask};
 use std::sync::Mutex;
 
@@ -39,38 +40,24 @@ fn build(
     model: Option<&str>,
     segment: Option<&str>,
 ) -> Result<(VideoDetector<SendNet>, Option<String>), String> {
-    let (base, learned) = match kind {
-        "auto" | "auto-motion" | "refine" | "refine-colour" => {
-            let learned = matches!(kind, "auto" | "refine");
-            match boxes {
-                Some(b) => (VideoDetector::refine(b), learned),
-                None if kind.starts_with("refine") => {
-                    return Err(format!("detector: {kind:?} needs boxes"))
-                }
-                None => (VideoDetector::auto(), learned),
-            }
-        }
-        "background" | "moving" if boxes.is_some() => {
-            return Err(format!(
-                "boxes: only the detectors refine and auto take boxes, not {kind:?}"
-            ))
-        }
-        "background" => (VideoDetector::background(), false),
-        "moving" => (VideoDetector::moving(), false),
-        other => {
-            return Err(format!(
-                "detector: {other:?} is not one of auto, refine, background, moving, \
-                 auto-motion, refine-colour"
-            ))
-        }
-    };
-    let given = matches!(base, Ok(VideoDetector::Refine(..)));
+    let k = VideoDetectorKind::parse(kind).ok_or_else(|| {
+        let names: Vec<&str> = VideoDetectorKind::ALL.iter().map(|(n, _)| *n).collect();
+        format!("detector: {kind:?} is not one of {}", names.join(", "))
+    })?;
+    let given = boxes.is_some();
+    let base = VideoDetector::choose(k, boxes);
     // Checked whether or not a model runs, as the CLI does: a typo in `segment` must not pass
     // unnoticed because this run happens not to use the model.
     let cfg = segment_settings(segment, given).map_err(|e| format!("segment: {e}"))?;
-    let mut det = base.map_err(|e: DetectError| e.to_string())?;
+    let mut det = base.map_err(|e| match e {
+        ChoiceError::RefineWithoutBoxes => format!("detector: {kind:?} needs boxes"),
+        ChoiceError::BoxesNotUsed => {
+            format!("boxes: only the detectors refine and auto take boxes, not {kind:?}")
+        }
+        ChoiceError::Detector(e) => e.to_string(),
+    })?;
     let mut warning = None;
-    if learned {
+    if k.wants_model() {
         let (net, w) = load_net(model)?;
         warning = w;
         if let Some(net) = net {
@@ -240,9 +227,7 @@ pub fn detect_files(
     model: Option<&str>,
     segment: Option<&str>,
 ) -> PyResult<(usize, usize, String, Option<String>)> {
-    use shapetrack::io::motchallenge::{detection_records, read_boxes, write_mots};
-    use shapetrack::io::{AtomicFile, IoError};
-    use std::io::Write as _;
+    use shapetrack::io::motchallenge::read_boxes;
     py.allow_threads(|| {
         in_pool(
             || -> Result<(usize, usize, String, Option<String>), String> {
@@ -257,33 +242,7 @@ pub fn detect_files(
                     .transpose()
                     .map_err(|e| s(&e))?;
                 let (mut r, warning) = build(detector, boxes, model, segment)?;
-                let mut file = AtomicFile::create(&out).map_err(|e| s(&e))?;
-                let mut masks = 0usize;
-                let mut first: Option<(u32, u32)> = None;
-                for (i, path) in files.iter().enumerate() {
-                    let n = i as u32 + 1;
-                    let img = shapetrack::io::read_rgb(path).map_err(|e| s(&e))?;
-                    let (w, h) = img.dimensions();
-                    let (fw, fh) = *first.get_or_insert((w, h));
-                    if (w, h) != (fw, fh) {
-                        return Err(format!(
-                            "{}: frame is {w}x{h}, the first frame was {fw}x{fh}",
-                            path.display()
-                        ));
-                    }
-                    let frame = Frame::rgb(img.as_raw(), w, h).map_err(|e| s(&e))?;
-                    let dets = r.detect(n, &frame).map_err(|e| format!("frame {n}: {e}"))?;
-                    let recs = detection_records(n, &dets, w, h);
-                    masks += recs.len();
-                    file.write_all(write_mots(&recs).as_bytes())
-                        .map_err(|source| {
-                            s(&IoError::Io {
-                                file: out.display().to_string(),
-                                source,
-                            })
-                        })?;
-                }
-                file.commit().map_err(|e| s(&e))?;
+                let masks = r.detect_files(&files, &out).map_err(|e| s(&e))?;
                 Ok((files.len(), masks, r.name(), warning))
             },
         )

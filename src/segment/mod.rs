@@ -41,7 +41,10 @@ mod video;
 pub use job::{Job, Outcome, WholeFrame};
 #[cfg(not(target_arch = "wasm32"))]
 pub use tract::TractNet;
-pub use video::{segment_settings, Learned, VideoDetector, AUTO_WHOLE_FRAME, JUDGE_FRAMES};
+pub use video::{
+    segment_settings, ChoiceError, DetectFilesError, Learned, VideoDetector, VideoDetectorKind,
+    AUTO_WHOLE_FRAME, JUDGE_FRAMES,
+};
 
 use crate::detect::components::{Components, Connectivity};
 use crate::frame::{BBox, Frame, Mask};

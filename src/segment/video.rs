@@ -7,7 +7,9 @@ use crate::detect::{
     BackgroundConfig, BackgroundSubtractor, BoxRefiner, CameraJudge, DetectError, Detector,
     MovingCameraDetector, MovingConfig, RefineConfig,
 };
-use crate::frame::{Detection, Frame};
+use crate::frame::{Detection, Frame, FrameError};
+use crate::io::IoError;
+use std::path::{Path, PathBuf};
 
 /// Frames the automatic choice watches before deciding between a static and a moving camera.
 pub const JUDGE_FRAMES: usize = 5;
@@ -36,6 +38,95 @@ pub fn segment_settings(json: Option<&str>, boxes: bool) -> Result<SegmentConfig
     };
     cfg.validate().map_err(|e| e.to_string())?;
     Ok(cfg)
+}
+
+/// Which detector runs over a video: the values of `shapetrack detect --detector` and of the
+/// Python package's `detector=` (one mapping, so the two build the same detector).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VideoDetectorKind {
+    /// Refinement when boxes are given; else background or moving, chosen from the camera's
+    /// motion; with the learned model on top.
+    Auto,
+    /// The static-camera background subtractor.
+    Background,
+    /// The moving-camera detector.
+    Moving,
+    /// Refinement of given boxes, with the learned model on top.
+    Refine,
+    /// `Auto` without the learned model.
+    AutoMotion,
+    /// `Refine` without the learned model.
+    RefineColour,
+}
+
+impl VideoDetectorKind {
+    /// Every kind with its name, in the order the CLI lists them.
+    pub const ALL: [(&'static str, VideoDetectorKind); 6] = [
+        ("auto", VideoDetectorKind::Auto),
+        ("refine", VideoDetectorKind::Refine),
+        ("background", VideoDetectorKind::Background),
+        ("moving", VideoDetectorKind::Moving),
+        ("auto-motion", VideoDetectorKind::AutoMotion),
+        ("refine-colour", VideoDetectorKind::RefineColour),
+    ];
+
+    /// The kind named `name` (as in [`Self::ALL`]).
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|&(_, k)| k)
+    }
+
+    /// Whether this kind puts the learned model on top when it is installed.
+    pub fn wants_model(self) -> bool {
+        matches!(self, VideoDetectorKind::Auto | VideoDetectorKind::Refine)
+    }
+}
+
+/// Why [`VideoDetector::choose`] could not build a detector.
+#[derive(Debug, thiserror::Error)]
+pub enum ChoiceError {
+    /// Refinement without boxes.
+    #[error("refinement needs boxes")]
+    RefineWithoutBoxes,
+    /// Boxes given to a detector that finds its own objects.
+    #[error("only the detectors refine and auto take boxes")]
+    BoxesNotUsed,
+    /// The detector's own settings.
+    #[error(transparent)]
+    Detector(#[from] DetectError),
+}
+
+/// Why [`VideoDetector::detect_files`] stopped; the output file is then left as it was.
+#[derive(Debug, thiserror::Error)]
+pub enum DetectFilesError {
+    /// Reading a frame or writing the output.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// A frame's pixels.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+    /// Frames of different sizes in one folder.
+    #[error("{file}: frame is {width}x{height}, the first frame was {first_width}x{first_height}")]
+    SizeChanged {
+        /// The frame.
+        file: String,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// The first frame's width.
+        first_width: u32,
+        /// The first frame's height.
+        first_height: u32,
+    },
+    /// The detector failed on a frame.
+    #[error("frame {frame}: {source}")]
+    Detect {
+        /// 1-based frame number.
+        frame: u32,
+        /// The detector's error.
+        #[source]
+        source: DetectError,
+    },
 }
 
 /// The learned stage of a [`VideoDetector`]: the network and its settings. `N` is the
@@ -112,6 +203,69 @@ impl<N: Net + ?Sized> VideoDetector<N> {
             BoxRefiner::new(RefineConfig::default())?,
             boxes,
         ))
+    }
+
+    /// The weights-free detector of `kind` (the learned stage is added by the caller, which
+    /// owns the model: see [`VideoDetectorKind::wants_model`]). `boxes[n]` are frame `n`'s
+    /// boxes to refine; with boxes, `Auto` refines them too.
+    pub fn choose(
+        kind: VideoDetectorKind,
+        boxes: Option<Vec<Vec<Detection>>>,
+    ) -> Result<Self, ChoiceError> {
+        use VideoDetectorKind as K;
+        Ok(match (kind, boxes) {
+            (K::Refine | K::Auto | K::RefineColour | K::AutoMotion, Some(b)) => Self::refine(b)?,
+            (K::Refine | K::RefineColour, None) => return Err(ChoiceError::RefineWithoutBoxes),
+            (K::Background | K::Moving, Some(_)) => return Err(ChoiceError::BoxesNotUsed),
+            (K::Background, None) => Self::background()?,
+            (K::Moving, None) => Self::moving()?,
+            (K::Auto | K::AutoMotion, None) => Self::auto()?,
+        })
+    }
+
+    /// Runs the detector over `files` (frame `k + 1` is `files[k]`) and writes the masks as
+    /// MOTS txt (id -1) to `out`, frame by frame so a long folder's masks are never all held;
+    /// the file is atomic, so a failure midway leaves any old output untouched. Returns the
+    /// number of masks written. What `shapetrack detect` and the Python package's
+    /// `detect_files` run, so the two write the same bytes.
+    pub fn detect_files(
+        &mut self,
+        files: &[PathBuf],
+        out: &Path,
+    ) -> Result<usize, DetectFilesError> {
+        use crate::io::motchallenge::{detection_records, write_mots};
+        use std::io::Write as _;
+        let mut file = crate::io::AtomicFile::create(out)?;
+        let mut masks = 0usize;
+        let mut first: Option<(u32, u32)> = None;
+        for (i, path) in files.iter().enumerate() {
+            let n = i as u32 + 1;
+            let img = crate::io::read_rgb(path)?;
+            let (w, h) = img.dimensions();
+            let (fw, fh) = *first.get_or_insert((w, h));
+            if (w, h) != (fw, fh) {
+                return Err(DetectFilesError::SizeChanged {
+                    file: path.display().to_string(),
+                    width: w,
+                    height: h,
+                    first_width: fw,
+                    first_height: fh,
+                });
+            }
+            let frame = Frame::rgb(img.as_raw(), w, h)?;
+            let dets = self
+                .detect(n, &frame)
+                .map_err(|source| DetectFilesError::Detect { frame: n, source })?;
+            let recs = detection_records(n, &dets, w, h);
+            masks += recs.len();
+            file.write_all(write_mots(&recs).as_bytes())
+                .map_err(|source| IoError::Io {
+                    file: out.display().to_string(),
+                    source,
+                })?;
+        }
+        file.commit()?;
+        Ok(masks)
     }
 
     /// `self` with the learned stage on top.

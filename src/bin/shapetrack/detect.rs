@@ -19,45 +19,69 @@
 //! `--boxes` (MOTChallenge txt) gives the boxes to refine into masks. Other scripts rely on
 //! exactly these flags.
 
+use clap::builder::PossibleValue;
 use clap::ValueEnum;
-use shapetrack::detect::DetectError;
-use shapetrack::io::motchallenge::{detection_records, read_boxes, write_mots};
-use shapetrack::io::{image_files, read_rgb, AtomicFile, IoError};
-use shapetrack::segment::{Learned, Net, SegmentConfig, VideoDetector, AUTO_WHOLE_FRAME};
-use shapetrack::{Detection, Frame};
-use std::io::Write as _;
+use shapetrack::io::image_files;
+use shapetrack::io::motchallenge::read_boxes;
+use shapetrack::segment::{
+    ChoiceError, Learned, Net, SegmentConfig, VideoDetector, VideoDetectorKind, AUTO_WHOLE_FRAME,
+};
+use shapetrack::Detection;
 use std::path::PathBuf;
 
-/// Which detector runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Kind {
-    /// `refine` when boxes are given; otherwise `background` or `moving`, chosen from how much
-    /// the camera moves over the first frames, then (with the model) each blob and each
-    /// salient region of the whole frame segmented by the learned model.
-    Auto,
-    /// The thesis' adaptive background subtractor (static camera).
-    Background,
-    /// Camera-motion-compensated background subtraction with box refinement (moving camera).
-    Moving,
-    /// Refines the `--boxes` into masks: the learned model (when installed), the colour
-    /// refinement for a box it finds nothing in.
-    Refine,
-    /// `auto` without the learned model: motion blobs only.
-    AutoMotion,
-    /// `refine` without the learned model: GrabCut-like colour + edge segmentation.
-    RefineColour,
-}
+/// Which detector runs: the library's [`VideoDetectorKind`] (the Python package parses the
+/// same names), as a `--detector` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Kind(pub VideoDetectorKind);
 
 impl Kind {
-    /// The weights-free kind this one falls back to, and whether it would use the model.
-    pub fn plain(self) -> (Kind, bool) {
-        match self {
-            Kind::Auto => (Kind::Auto, true),
-            Kind::Refine => (Kind::Refine, true),
-            Kind::AutoMotion => (Kind::Auto, false),
-            Kind::RefineColour => (Kind::Refine, false),
-            k => (k, false),
-        }
+    /// The automatic detector.
+    pub const AUTO: Kind = Kind(VideoDetectorKind::Auto);
+    /// The static-camera background subtractor.
+    pub const BACKGROUND: Kind = Kind(VideoDetectorKind::Background);
+}
+
+/// Every `--detector` value, in the library's order.
+const KINDS: [Kind; VideoDetectorKind::ALL.len()] = {
+    let mut out = [Kind::AUTO; VideoDetectorKind::ALL.len()];
+    let mut i = 0;
+    while i < out.len() {
+        out[i] = Kind(VideoDetectorKind::ALL[i].1);
+        i += 1;
+    }
+    out
+};
+
+impl ValueEnum for Kind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &KINDS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        let (name, _) = VideoDetectorKind::ALL.iter().find(|(_, k)| *k == self.0)?;
+        let help = match self.0 {
+            VideoDetectorKind::Auto => {
+                "`refine` when boxes are given; otherwise `background` or `moving`, chosen from \
+                 how much the camera moves over the first frames, then (with the model) each \
+                 blob and each salient region of the whole frame segmented by the learned model"
+            }
+            VideoDetectorKind::Background => {
+                "The thesis' adaptive background subtractor (static camera)"
+            }
+            VideoDetectorKind::Moving => {
+                "Camera-motion-compensated background subtraction with box refinement (moving \
+                 camera)"
+            }
+            VideoDetectorKind::Refine => {
+                "Refines the `--boxes` into masks: the learned model (when installed), the \
+                 colour refinement for a box it finds nothing in"
+            }
+            VideoDetectorKind::AutoMotion => "`auto` without the learned model: motion blobs only",
+            VideoDetectorKind::RefineColour => {
+                "`refine` without the learned model: GrabCut-like colour + edge segmentation"
+            }
+        };
+        Some(PossibleValue::new(*name).help(help))
     }
 }
 
@@ -68,7 +92,7 @@ pub struct Args {
     #[arg(long)]
     frames: PathBuf,
     /// Detector.
-    #[arg(long, value_enum, default_value_t = Kind::Auto)]
+    #[arg(long, value_enum, default_value_t = Kind::AUTO)]
     detector: Kind,
     /// MOTChallenge boxes (frame,id,x,y,w,h,score,...) to refine into masks.
     #[arg(long)]
@@ -165,54 +189,25 @@ pub enum DetectCliError {
     /// `--boxes` with a detector that finds its own objects.
     #[error("--boxes can only be used with --detector refine or auto")]
     BoxesNotUsed,
-    /// Frames of different sizes in one folder.
-    #[error("{file}: frame is {width}x{height}, the first frame was {first_width}x{first_height}")]
-    SizeChanged {
-        /// The frame.
-        file: String,
-        /// Its width.
-        width: u32,
-        /// Its height.
-        height: u32,
-        /// The first frame's width.
-        first_width: u32,
-        /// The first frame's height.
-        first_height: u32,
-    },
     /// `--out` is one of the inputs.
     #[error("--out {0} would overwrite an input")]
     OutIsInput(String),
-    /// A detector failed on a frame.
-    #[error("frame {frame}: {source}")]
-    Detect {
-        /// 1-based frame number.
-        frame: u32,
-        /// The detector's error.
-        #[source]
-        source: DetectError,
-    },
 }
 
 /// A detector chosen by [`Kind`], run frame by frame (the library's, shared with the Python
 /// package).
 pub type Runner = VideoDetector;
 
-/// The detector for `kind`; `boxes` are the per-frame boxes (refine, auto).
+/// The weights-free detector for `kind` (the library's [`VideoDetector::choose`], with the
+/// CLI's wording); `boxes` are the per-frame boxes (refine, auto).
 pub fn runner(
     kind: Kind,
     boxes: Option<Vec<Vec<Detection>>>,
 ) -> Result<Runner, Box<dyn std::error::Error>> {
-    Ok(match (kind.plain().0, boxes) {
-        (Kind::Refine | Kind::Auto | Kind::RefineColour | Kind::AutoMotion, Some(b)) => {
-            Runner::refine(b)?
-        }
-        (Kind::Refine | Kind::RefineColour, None) => {
-            return Err(DetectCliError::RefineWithoutBoxes.into())
-        }
-        (_, Some(_)) => return Err(DetectCliError::BoxesNotUsed.into()),
-        (Kind::Background, None) => Runner::background()?,
-        (Kind::Moving, None) => Runner::moving()?,
-        (Kind::Auto | Kind::AutoMotion, None) => Runner::auto()?,
+    Runner::choose(kind.0, boxes).map_err(|e| match e {
+        ChoiceError::RefineWithoutBoxes => DetectCliError::RefineWithoutBoxes.into(),
+        ChoiceError::BoxesNotUsed => DetectCliError::BoxesNotUsed.into(),
+        ChoiceError::Detector(e) => e.into(),
     })
 }
 
@@ -235,12 +230,11 @@ pub fn run(args: Args) -> crate::CliResult {
         .as_deref()
         .map(|p| read_boxes(p, files.len()))
         .transpose()?;
-    let (kind, wants_model) = args.detector.plain();
     // Checked whether or not a model runs: a typo in --segment must not pass unnoticed
     // just because this run happens not to use the model.
     let cfg = segment_settings(args.segment.as_deref(), boxes.is_some())?;
-    let mut runner = runner(kind, boxes)?;
-    if wants_model {
+    let mut runner = runner(args.detector, boxes)?;
+    if args.detector.0.wants_model() {
         if let Some(net) = ModelChoice::from_flag(args.model.as_deref()).load("detect")? {
             runner = runner.learned(Learned {
                 net,
@@ -249,39 +243,7 @@ pub fn run(args: Args) -> crate::CliResult {
             });
         }
     }
-    // Written frame by frame, like `track`: a long folder's masks are never all held. The
-    // file is atomic, so a failure midway still leaves any old output untouched.
-    let mut out = AtomicFile::create(&args.out)?;
-    let mut masks = 0usize;
-    let mut first: Option<(u32, u32)> = None;
-    for (i, path) in files.iter().enumerate() {
-        let n = i as u32 + 1;
-        let img = read_rgb(path)?;
-        let (w, h) = img.dimensions();
-        let (fw, fh) = *first.get_or_insert((w, h));
-        if (w, h) != (fw, fh) {
-            return Err(DetectCliError::SizeChanged {
-                file: path.display().to_string(),
-                width: w,
-                height: h,
-                first_width: fw,
-                first_height: fh,
-            }
-            .into());
-        }
-        let frame = Frame::rgb(img.as_raw(), w, h)?;
-        let dets = runner
-            .detect(n, &frame)
-            .map_err(|source| DetectCliError::Detect { frame: n, source })?;
-        let recs = detection_records(n, &dets, w, h);
-        masks += recs.len();
-        out.write_all(write_mots(&recs).as_bytes())
-            .map_err(|source| IoError::Io {
-                file: args.out.display().to_string(),
-                source,
-            })?;
-    }
-    out.commit()?;
+    let masks = runner.detect_files(&files, &args.out)?;
     eprintln!(
         "detect: {} frames, {masks} masks, detector {}",
         files.len(),
