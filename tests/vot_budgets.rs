@@ -113,3 +113,37 @@ fn vot_streams_its_frames_instead_of_holding_the_sequence() {
     let results = std::fs::read_to_string(out.join("vot_streams_001.txt")).unwrap();
     assert_eq!(results.lines().count(), n as usize);
 }
+
+#[test]
+fn vot_takes_the_followers_settings_and_checks_them() {
+    let seq = vot_sequence("vot_config", 12, 400, 240);
+    let run = |name: &str, config: Option<&str>| {
+        let out = seq.with_extension(name);
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shapetrack"));
+        cmd.args(["vot", "--protocol", "reset", "--model", "none", "--seq"])
+            .arg(&seq)
+            .arg("--out")
+            .arg(&out);
+        if let Some(c) = config {
+            cmd.args(["--config", c]);
+        }
+        let r = cmd.output().unwrap();
+        (r, out.join("vot_config_001.txt"))
+    };
+    let (r, default) = run("default", None);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // A follower that counts itself lost on every frame and stops at once: its regions are
+    // empty from the second frame, so the reset protocol's output differs.
+    let (r, stopping) = run("stopping", Some(r#"{"lost_confidence": 1.0, "max_lost": 0}"#));
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_ne!(
+        std::fs::read_to_string(&default).unwrap(),
+        std::fs::read_to_string(&stopping).unwrap()
+    );
+    // Out-of-range settings fail before anything is written.
+    let (r, bad) = run("bad", Some(r#"{"max_side": 3}"#));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success() && err.contains("max_side"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!bad.exists());
+}

@@ -195,6 +195,16 @@ pub struct FollowConfig {
     /// the 21 DAVIS clips at a slack of 0.05, carried 0.672 against 0.720, kite-walk 0.380
     /// against 0.733; carried only when the IoU reaches 0.75, 0.698).
     pub learned_carry_iou: f64,
+    /// A learned outline taken for a frame is also carried (as by `learned_carry_iou`) when
+    /// the follower's own confidence in its estimate is below this; 0 = never by confidence.
+    /// Default 0.5: below it the fit found almost no keypoints (confidence is half the fit's
+    /// inlier share, half the colour model's agreement), so the follower's own estimate is
+    /// its last outline moved by its last motion, and the network's outline is the better
+    /// state. Why: on a textureless object (the VOT bag) the follower's own estimate drifted
+    /// while the outline was not carried (reset-protocol EAO 0.658 → 0.504 when carrying was
+    /// turned off); carried while unsure, 0.607 (anchor 0.061 → 0.105), and the 21 DAVIS clips
+    /// keep their mean J (0.7224 against 0.7221; tests/data/follow/README.md).
+    pub learned_carry_below: f64,
     /// The learned segmentation's crop and threshold settings.
     pub segment: SegmentConfig,
     /// RANSAC seed.
@@ -226,6 +236,7 @@ impl Default for FollowConfig {
             learned_below: 1.0,
             learned_box_slack: Some(0.1),
             learned_carry_iou: 1.0,
+            learned_carry_below: 0.5,
             segment: SegmentConfig::default(),
             seed: 0x5eed_f011,
         }
@@ -291,6 +302,9 @@ impl FollowConfig {
         }
         if !(0.0..=1.0).contains(&self.learned_carry_iou) {
             return bad("learned_carry_iou", "must be in [0, 1]");
+        }
+        if !(0.0..=1.0).contains(&self.learned_carry_below) {
+            return bad("learned_carry_below", "must be in [0, 1]");
         }
         if !(0.0..=1.0).contains(&self.reanchor_iou) {
             return bad("reanchor_iou", "must be in [0, 1]");

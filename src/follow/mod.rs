@@ -339,7 +339,10 @@ impl Follower {
                     && added <= cfg.learned_max_growth
                 {
                     let previous = std::mem::replace(&mut mask, own);
-                    if iou < cfg.learned_carry_iou {
+                    // The follower goes on from its own estimate unless the two agree
+                    // closely, or its own estimate is unsure (its fit found almost nothing:
+                    // it is only the last outline moved by the last motion).
+                    if iou < cfg.learned_carry_iou && confidence >= cfg.learned_carry_below {
                         own_estimate = Some((previous, confidence));
                     }
                     confidence = confidence.max(iou);

@@ -210,11 +210,7 @@ pub fn run(args: Args) -> crate::CliResult {
         None => None,
     };
     let frame0 = frame_of(&first)?;
-    let cfg: FollowConfig = match &args.config {
-        Some(j) => serde_json::from_str(j).map_err(|e| format!("--config: {e}"))?,
-        None => FollowConfig::default(),
-    };
-    cfg.validate()?;
+    let cfg = follow_config(args.config.as_deref())?;
     let net = shared_net(args.model.as_deref(), args.net_cache.clone(), "follow")?;
 
     let mut steps: Vec<Option<FollowStep>> = vec![None; files.len()];
@@ -387,6 +383,19 @@ pub struct VotArgs {
     /// Folder keeping the network's outputs between runs (evaluation only).
     #[arg(long)]
     net_cache: Option<PathBuf>,
+    /// Follower settings as JSON (missing fields take their defaults), as `follow --config`.
+    #[arg(long)]
+    config: Option<String>,
+}
+
+/// The follower's settings from `--config` (JSON over the defaults), checked.
+fn follow_config(json: Option<&str>) -> Result<FollowConfig, Box<dyn std::error::Error>> {
+    let cfg: FollowConfig = match json {
+        Some(j) => serde_json::from_str(j).map_err(|e| format!("--config: {e}"))?,
+        None => FollowConfig::default(),
+    };
+    cfg.validate()?;
+    Ok(cfg)
 }
 
 fn region_mask(r: &Region, w: u32, h: u32) -> Mask {
@@ -405,6 +414,7 @@ struct VotSeq<'a> {
     gt: &'a [Region],
     size: (u32, u32),
     net: Option<&'a SharedNet>,
+    cfg: &'a FollowConfig,
 }
 
 impl VotSeq<'_> {
@@ -437,7 +447,7 @@ fn follow_run(
     let mask = region_mask(init, w, h);
     let mut out = Vec::new();
     let first = seq.frame(start)?;
-    let Ok(mut f) = Follower::new(&frame_of(&first)?, &mask, FollowConfig::default()) else {
+    let Ok(mut f) = Follower::new(&frame_of(&first)?, &mask, seq.cfg.clone()) else {
         // An empty or off-frame gt region: nothing to follow.
         out.extend(order.map(|_| Region::Mask(Mask::empty())));
         return Ok(out);
@@ -514,6 +524,7 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
         )
         .into());
     }
+    let cfg = follow_config(args.config.as_deref())?;
     std::fs::create_dir_all(&args.out)?;
     let net = shared_net(args.model.as_deref(), args.net_cache.clone(), "vot")?;
     let n = files.len();
@@ -524,6 +535,7 @@ pub fn run_vot(args: VotArgs) -> crate::CliResult {
         gt: &gt,
         size: (w, h),
         net: net.as_ref(),
+        cfg: &cfg,
     };
     let run = |start: usize, init: &Region, order: Box<dyn Iterator<Item = usize>>, stop| {
         follow_run(&vot_seq, start, init, order, stop, &mut stats.borrow_mut()).unwrap_or_else(
