@@ -701,7 +701,10 @@ fn an_unsure_follower_carries_the_learned_outline() {
                 let frame = Frame::rgb(rgb, W, H).unwrap();
                 let crop = f.learned_crop().expect("a running follower has a crop");
                 let sal = Saliency::new(crop, &oracle_map(&crop, truth), true).unwrap();
-                f.step_learned(&frame, &[], Some(&sal)).unwrap().mask.iou(truth)
+                f.step_learned(&frame, &[], Some(&sal))
+                    .unwrap()
+                    .mask
+                    .iou(truth)
             })
             .collect()
     };

@@ -134,7 +134,10 @@ fn vot_takes_the_followers_settings_and_checks_them() {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     // A follower that counts itself lost on every frame and stops at once: its regions are
     // empty from the second frame, so the reset protocol's output differs.
-    let (r, stopping) = run("stopping", Some(r#"{"lost_confidence": 1.0, "max_lost": 0}"#));
+    let (r, stopping) = run(
+        "stopping",
+        Some(r#"{"lost_confidence": 1.0, "max_lost": 0}"#),
+    );
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert_ne!(
         std::fs::read_to_string(&default).unwrap(),
