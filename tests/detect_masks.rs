@@ -555,6 +555,9 @@ fn a_detector_is_chosen_by_kind_and_boxes() {
     let boxes = || Some(vec![Vec::new(), Vec::new()]);
     for (name, kind) in VideoDetectorKind::ALL {
         assert_eq!(VideoDetectorKind::parse(name), Some(kind));
+        // The name the CLI takes (clap's, from the variant) is the one Python parses.
+        let cli = clap::ValueEnum::to_possible_value(&kind).unwrap();
+        assert_eq!(cli.get_name(), name);
         assert_eq!(
             kind.wants_model(),
             matches!(name, "auto" | "refine"),

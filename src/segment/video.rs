@@ -41,26 +41,30 @@ pub fn segment_settings(json: Option<&str>, boxes: bool) -> Result<SegmentConfig
 }
 
 /// Which detector runs over a video: the values of `shapetrack detect --detector` and of the
-/// Python package's `detector=` (one mapping, so the two build the same detector).
+/// Python package's `detector=` (one mapping, so the two build the same detector). The doc
+/// comments are the CLI's help.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum VideoDetectorKind {
-    /// Refinement when boxes are given; else background or moving, chosen from the camera's
-    /// motion; with the learned model on top.
+    /// `refine` when boxes are given; otherwise `background` or `moving`, chosen from how much
+    /// the camera moves over the first frames, then (with the model) each blob and each
+    /// salient region of the whole frame segmented by the learned model.
     Auto,
-    /// The static-camera background subtractor.
+    /// The thesis' adaptive background subtractor (static camera).
     Background,
-    /// The moving-camera detector.
+    /// Camera-motion-compensated background subtraction with box refinement (moving camera).
     Moving,
-    /// Refinement of given boxes, with the learned model on top.
+    /// Refines the `--boxes` into masks: the learned model (when installed), the colour
+    /// refinement for a box it finds nothing in.
     Refine,
-    /// `Auto` without the learned model.
+    /// `auto` without the learned model: motion blobs only.
     AutoMotion,
-    /// `Refine` without the learned model.
+    /// `refine` without the learned model: GrabCut-like colour + edge segmentation.
     RefineColour,
 }
 
 impl VideoDetectorKind {
-    /// Every kind with its name, in the order the CLI lists them.
+    /// Every kind with its name (the CLI's value; for callers without the `cli` feature).
     pub const ALL: [(&'static str, VideoDetectorKind); 6] = [
         ("auto", VideoDetectorKind::Auto),
         ("refine", VideoDetectorKind::Refine),

@@ -19,8 +19,6 @@
 //! `--boxes` (MOTChallenge txt) gives the boxes to refine into masks. Other scripts rely on
 //! exactly these flags.
 
-use clap::builder::PossibleValue;
-use clap::ValueEnum;
 use shapetrack::io::image_files;
 use shapetrack::io::motchallenge::read_boxes;
 use shapetrack::segment::{
@@ -29,61 +27,8 @@ use shapetrack::segment::{
 use shapetrack::Detection;
 use std::path::PathBuf;
 
-/// Which detector runs: the library's [`VideoDetectorKind`] (the Python package parses the
-/// same names), as a `--detector` value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Kind(pub VideoDetectorKind);
-
-impl Kind {
-    /// The automatic detector.
-    pub const AUTO: Kind = Kind(VideoDetectorKind::Auto);
-    /// The static-camera background subtractor.
-    pub const BACKGROUND: Kind = Kind(VideoDetectorKind::Background);
-}
-
-/// Every `--detector` value, in the library's order.
-const KINDS: [Kind; VideoDetectorKind::ALL.len()] = {
-    let mut out = [Kind::AUTO; VideoDetectorKind::ALL.len()];
-    let mut i = 0;
-    while i < out.len() {
-        out[i] = Kind(VideoDetectorKind::ALL[i].1);
-        i += 1;
-    }
-    out
-};
-
-impl ValueEnum for Kind {
-    fn value_variants<'a>() -> &'a [Self] {
-        &KINDS
-    }
-
-    fn to_possible_value(&self) -> Option<PossibleValue> {
-        let (name, _) = VideoDetectorKind::ALL.iter().find(|(_, k)| *k == self.0)?;
-        let help = match self.0 {
-            VideoDetectorKind::Auto => {
-                "`refine` when boxes are given; otherwise `background` or `moving`, chosen from \
-                 how much the camera moves over the first frames, then (with the model) each \
-                 blob and each salient region of the whole frame segmented by the learned model"
-            }
-            VideoDetectorKind::Background => {
-                "The thesis' adaptive background subtractor (static camera)"
-            }
-            VideoDetectorKind::Moving => {
-                "Camera-motion-compensated background subtraction with box refinement (moving \
-                 camera)"
-            }
-            VideoDetectorKind::Refine => {
-                "Refines the `--boxes` into masks: the learned model (when installed), the \
-                 colour refinement for a box it finds nothing in"
-            }
-            VideoDetectorKind::AutoMotion => "`auto` without the learned model: motion blobs only",
-            VideoDetectorKind::RefineColour => {
-                "`refine` without the learned model: GrabCut-like colour + edge segmentation"
-            }
-        };
-        Some(PossibleValue::new(*name).help(help))
-    }
-}
+/// Which detector runs (the library's kinds, which the Python package parses too).
+pub type Kind = VideoDetectorKind;
 
 /// Arguments of `shapetrack detect`.
 #[derive(clap::Args)]
@@ -92,7 +37,7 @@ pub struct Args {
     #[arg(long)]
     frames: PathBuf,
     /// Detector.
-    #[arg(long, value_enum, default_value_t = Kind::AUTO)]
+    #[arg(long, value_enum, default_value_t = Kind::Auto)]
     detector: Kind,
     /// MOTChallenge boxes (frame,id,x,y,w,h,score,...) to refine into masks.
     #[arg(long)]
@@ -204,7 +149,7 @@ pub fn runner(
     kind: Kind,
     boxes: Option<Vec<Vec<Detection>>>,
 ) -> Result<Runner, Box<dyn std::error::Error>> {
-    Runner::choose(kind.0, boxes).map_err(|e| match e {
+    Runner::choose(kind, boxes).map_err(|e| match e {
         ChoiceError::RefineWithoutBoxes => DetectCliError::RefineWithoutBoxes.into(),
         ChoiceError::BoxesNotUsed => DetectCliError::BoxesNotUsed.into(),
         ChoiceError::Detector(e) => e.into(),
@@ -234,7 +179,7 @@ pub fn run(args: Args) -> crate::CliResult {
     // just because this run happens not to use the model.
     let cfg = segment_settings(args.segment.as_deref(), boxes.is_some())?;
     let mut runner = runner(args.detector, boxes)?;
-    if args.detector.0.wants_model() {
+    if args.detector.wants_model() {
         if let Some(net) = ModelChoice::from_flag(args.model.as_deref()).load("detect")? {
             runner = runner.learned(Learned {
                 net,

@@ -229,12 +229,12 @@ fn score(
     frames: &mut Vec<(usize, f64)>,
 ) -> Result<Score, Box<dyn std::error::Error>> {
     let mut runner = match m {
-        Method::Background => Some(runner(Kind::BACKGROUND, None)?),
+        Method::Background => Some(runner(Kind::Background, None)?),
         Method::Moving => Some(Runner::Moving(Box::new(MovingCameraDetector::new(
             ctx.moving.clone(),
         )?))),
-        Method::AutoMotion => Some(runner(Kind::AUTO, None)?),
-        Method::Auto => Some(runner(Kind::AUTO, None)?.learned(ctx.learned(AUTO_WHOLE_FRAME)?)),
+        Method::AutoMotion => Some(runner(Kind::Auto, None)?),
+        Method::Auto => Some(runner(Kind::Auto, None)?.learned(ctx.learned(AUTO_WHOLE_FRAME)?)),
         _ => None,
     };
     let mut net = match m {

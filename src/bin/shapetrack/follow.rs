@@ -140,7 +140,7 @@ impl Travel {
         let detector = match kind {
             DetectorKind::None => None,
             DetectorKind::Auto => {
-                let mut d = runner(Kind::AUTO, None)?;
+                let mut d = runner(Kind::Auto, None)?;
                 d.detect(0, frame)?;
                 Some(d)
             }
