@@ -8,7 +8,9 @@
 //! 2. **match**: SIFT keypoints of the search region (bounded by [`FollowConfig::max_side`])
 //!    against the target model's keypoints (those inside the mask at the last confident frame);
 //! 3. **fit**: a similarity transform by RANSAC, model frame → this frame, or the predicted
-//!    translation when too few matches agree;
+//!    translation when too few matches agree, or when the fit's keypoints move with the
+//!    background after the target had moved against it (a second fit, of the last frame's
+//!    keypoints, gives the background's motion; see [`FollowConfig::background_lock`]);
 //! 4. **warp**: the model mask moved by it;
 //! 5. **refine**: pixels within a band around the warped outline relabelled by the colour model
 //!    (target vs surrounding-background histograms) with the warped shape as a prior;
@@ -38,7 +40,9 @@ pub use warp::{rasterize_polygon, warp_mask};
 use serde::{Deserialize, Serialize};
 
 use crate::features::sift::{self, MatchConfig, SiftFeatures};
-use crate::features::transform::{ransac, RansacConfig, Transform, TransformKind, Translation};
+use crate::features::transform::{
+    ransac, RansacConfig, RansacFit, Transform, TransformKind, Translation,
+};
 use crate::frame::{BBox, Detection, Frame, Mask, Point};
 use crate::segment::{input_tensor, Crop, Net, Saliency};
 use colour::{ColourModel, RefineParams, Ring};
@@ -83,6 +87,13 @@ pub struct Follower {
     velocity: Point,
     lost_run: usize,
     stopped: bool,
+    /// The last frame's keypoints of the search region (for the background's motion; kept
+    /// only with [`FollowConfig::background_lock`]).
+    background: SiftFeatures,
+    /// The target's recent motion against the background, in pixels per frame (smoothed).
+    relative: f64,
+    /// The last frame was not lost, so the model (and its mask) are that frame's.
+    model_fresh: bool,
 }
 
 fn sqrt_area(m: &Mask) -> f64 {
@@ -122,6 +133,9 @@ impl Follower {
             velocity: Point::default(),
             lost_run: 0,
             stopped: false,
+            background: SiftFeatures::default(),
+            relative: 0.0,
+            model_fresh: true,
             cfg,
         })
     }
@@ -264,10 +278,45 @@ impl Follower {
         };
         let downscale = region.map_or(1.0, |r| (r.w.max(r.h) / cfg.max_side as f64).max(1.0));
         let fit = self.fit(&feats, downscale);
+        // A fit on the background: the target had moved against the background, and now the
+        // fit's keypoints move with it (an occluder or the scene behind, taken into the model
+        // while it crossed the outline, outvotes the target's own keypoints).
+        let mut locked = false;
+        if let (Some(share), Some((t, inl))) = (cfg.background_lock, &fit) {
+            if let Some((bg, on_bg)) = self.background_motion(&feats, downscale) {
+                let on = inl.iter().filter(|(_, j)| on_bg[*j]).count() as f64;
+                // Twice the inlier threshold: slower relative motion is within the fits' noise.
+                let floor = 2.0 * cfg.ransac_threshold * downscale;
+                if self.relative > floor && on >= share * inl.len() as f64 {
+                    // Decays, so a target that has really stopped against the background is
+                    // taken up again (after ~7 frames per halving of its speed).
+                    self.relative *= 0.9;
+                    locked = true;
+                    // The model's keypoints that moved with the background are not the
+                    // target's.
+                    let drop: Vec<usize> = inl
+                        .iter()
+                        .filter(|(_, j)| on_bg[*j])
+                        .map(|(i, _)| *i)
+                        .collect();
+                    self.model.feats = without(&self.model.feats, &drop);
+                } else if self.model_fresh {
+                    // Both fits map the last frame then: compare where they take its centre.
+                    if let Some(cm) = self.model.mask.centroid() {
+                        let d = t.apply(cm).dist2(bg.apply(cm)).sqrt();
+                        self.relative = 0.7 * self.relative + 0.3 * d;
+                    }
+                }
+            }
+        }
+        let fit = if locked { None } else { fit };
 
         // Warp.
         let (warped, inliers) = match &fit {
-            Some((t, n)) => (warp_mask(&self.model.mask, t, self.width, self.height), *n),
+            Some((t, n)) => (
+                warp_mask(&self.model.mask, t, self.width, self.height),
+                n.len(),
+            ),
             None => {
                 let t = Transform::Translation(Translation {
                     dx: self.velocity.x,
@@ -305,6 +354,10 @@ impl Follower {
 
         let geo = (inliers as f64 / cfg.full_inliers as f64).min(1.0);
         let mut confidence = 0.5 * geo + 0.5 * agreement;
+        if locked {
+            // The fit found the background: the target is not where it says.
+            confidence = confidence.min(0.99 * cfg.lost_confidence);
+        }
 
         // The learned outline wins where it agrees with the followed one; where the follower
         // has lost its object, it re-anchors on a learned region near the prediction.
@@ -428,6 +481,10 @@ impl Follower {
         if !carried.is_empty() {
             self.last = carried;
         }
+        if cfg.background_lock.is_some() {
+            self.background = feats;
+            self.model_fresh = !lost;
+        }
         Ok(FollowStep {
             mask: if self.stopped { Mask::empty() } else { output },
             confidence,
@@ -439,47 +496,85 @@ impl Follower {
         })
     }
 
-    /// RANSAC similarity from the model's keypoints to this frame's, if enough agree and
-    /// the scale change is plausible. Returns the transform and its inlier count.
-    fn fit(&self, feats: &SiftFeatures, downscale: f64) -> Option<(Transform, usize)> {
-        let cfg = &self.cfg;
-        let matches = sift::match_descriptors(
-            &self.model.feats,
-            feats,
-            &MatchConfig {
-                ratio: cfg.match_ratio,
-                cross_check: false,
-            },
-        );
-        if matches.len() < cfg.min_inliers {
-            return None;
+    /// The background's motion from the last frame's search region to this one's, and which
+    /// of `feats` move with it; `None` when it cannot be fitted.
+    fn background_motion(
+        &self,
+        feats: &SiftFeatures,
+        downscale: f64,
+    ) -> Option<(Transform, Vec<bool>)> {
+        let (matches, bg) = robust_fit(&self.background, feats, &self.cfg, downscale)?;
+        let mut on = vec![false; feats.len()];
+        for &k in &bg.inliers {
+            on[matches[k].train] = true;
         }
-        let pairs: Vec<(Point, Point)> = matches
-            .iter()
-            .map(|m| {
-                let a = self.model.feats.keypoints[m.query];
-                let b = feats.keypoints[m.train];
-                (
-                    Point::new(a.x as f64, a.y as f64),
-                    Point::new(b.x as f64, b.y as f64),
-                )
-            })
-            .collect();
-        let rc = RansacConfig {
-            threshold: cfg.ransac_threshold * downscale,
-            max_iterations: 300,
-            seed: cfg.seed,
-            ..RansacConfig::default()
-        };
-        let fit = ransac(TransformKind::Similarity, &pairs, &rc).ok()?;
+        Some((bg.transform, on))
+    }
+
+    /// RANSAC similarity from the model's keypoints to this frame's, if enough agree and
+    /// the scale change is plausible: the transform and its inliers' (model, frame) keypoint
+    /// indices.
+    fn fit(
+        &self,
+        feats: &SiftFeatures,
+        downscale: f64,
+    ) -> Option<(Transform, Vec<(usize, usize)>)> {
+        let cfg = &self.cfg;
+        let (matches, fit) = robust_fit(&self.model.feats, feats, cfg, downscale)?;
         let s = fit.transform.scale();
         let steps = (self.lost_run + 1) as f64;
         let max = cfg.max_scale_change.powf(steps.min(3.0));
-        if fit.inliers.len() < cfg.min_inliers || !(s.is_finite() && s <= max && s >= 1.0 / max) {
+        if !(s.is_finite() && s <= max && s >= 1.0 / max) {
             return None;
         }
-        Some((fit.transform, fit.inliers.len()))
+        let inliers = fit
+            .inliers
+            .iter()
+            .map(|&i| (matches[i].query, matches[i].train))
+            .collect();
+        Some((fit.transform, inliers))
     }
+}
+
+/// Keypoints `from` matched to `to` and a RANSAC similarity fitted to the matches, if at
+/// least [`FollowConfig::min_inliers`] agree (`downscale`: the search region's, which scales
+/// the inlier threshold to frame pixels).
+fn robust_fit(
+    from: &SiftFeatures,
+    to: &SiftFeatures,
+    cfg: &FollowConfig,
+    downscale: f64,
+) -> Option<(Vec<sift::SiftMatch>, RansacFit)> {
+    let matches = sift::match_descriptors(
+        from,
+        to,
+        &MatchConfig {
+            ratio: cfg.match_ratio,
+            cross_check: false,
+        },
+    );
+    if matches.len() < cfg.min_inliers {
+        return None;
+    }
+    let pairs: Vec<(Point, Point)> = matches
+        .iter()
+        .map(|m| {
+            let a = from.keypoints[m.query];
+            let b = to.keypoints[m.train];
+            (
+                Point::new(a.x as f64, a.y as f64),
+                Point::new(b.x as f64, b.y as f64),
+            )
+        })
+        .collect();
+    let rc = RansacConfig {
+        threshold: cfg.ransac_threshold * downscale,
+        max_iterations: 300,
+        seed: cfg.seed,
+        ..RansacConfig::default()
+    };
+    let fit = ransac(TransformKind::Similarity, &pairs, &rc).ok()?;
+    (fit.inliers.len() >= cfg.min_inliers).then_some((matches, fit))
 }
 
 /// The connected parts of `region` that lie mostly on `mask` (over half of their own pixels,
@@ -599,6 +694,18 @@ fn select_inside(feats: &SiftFeatures, mask: &Mask) -> SiftFeatures {
     let mut out = SiftFeatures::default();
     for (k, d) in feats.keypoints.iter().zip(&feats.descriptors) {
         if mask.get(k.x.floor() as i32, k.y.floor() as i32) {
+            out.keypoints.push(*k);
+            out.descriptors.push(*d);
+        }
+    }
+    out
+}
+
+/// `feats` without the keypoints at indices `drop`.
+fn without(feats: &SiftFeatures, drop: &[usize]) -> SiftFeatures {
+    let mut out = SiftFeatures::default();
+    for (i, (k, d)) in feats.keypoints.iter().zip(&feats.descriptors).enumerate() {
+        if !drop.contains(&i) {
             out.keypoints.push(*k);
             out.descriptors.push(*d);
         }

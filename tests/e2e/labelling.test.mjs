@@ -386,15 +386,17 @@ test('bad files are refused with a message, not a crash', async () => {
 // field with numbers printed short: 799 → 809.1 KiB). 812 → 816 KB with
 // `Detections.dropParts` (an object detector's parts of a person are not tracks of their own:
 // 810.5 → 812.1 KiB; DAVIS tennis, moving camera + SSD, frames with a second track on the
-// player 60 of 70 → 1).
-test('wasm is at most 816 KB gzipped', () => {
+// player 60 of 70 → 1). 816 → 820 KB with the follower's check for a fit on the background
+// (`FollowConfig::background_lock`: a second keypoint fit for the background's motion;
+// 815.0 → 817.0 KiB; following a first mask on the 21 DAVIS clips, mean J 0.722 → 0.771).
+test('wasm is at most 820 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
   assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
   const bytes = readFileSync(join(dir, wasm[0]));
   const gz = gzipSync(bytes, { level: 9 }).length;
   console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
-  assert.ok(gz <= 816 * 1024, `${gz} bytes gzipped`);
+  assert.ok(gz <= 820 * 1024, `${gz} bytes gzipped`);
 });
 
 test('edits not exported are never replaced without a question: demo, import and closing the tab ask first', async () => {
