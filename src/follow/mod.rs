@@ -92,7 +92,7 @@ pub struct Follower {
     background: SiftFeatures,
     /// The target's recent motion against the background, in pixels per frame (smoothed).
     relative: f64,
-    /// The last frame was not lost, so the model (and its mask) are that frame's.
+    /// The model (keypoints and mask) was taken from the last frame.
     model_fresh: bool,
 }
 
@@ -458,6 +458,7 @@ impl Follower {
             let v = c1 - c0;
             self.velocity = self.velocity * 0.5 + v * 0.5;
         }
+        let mut renewed = false;
         if lost {
             self.lost_run += 1;
             if self.lost_run > cfg.max_lost {
@@ -473,6 +474,7 @@ impl Follower {
                     mask: carried.clone(),
                     feats: new_feats,
                 };
+                renewed = true;
             }
             let ring = ring(mask, cfg);
             self.colour
@@ -483,7 +485,7 @@ impl Follower {
         }
         if cfg.background_lock.is_some() {
             self.background = feats;
-            self.model_fresh = !lost;
+            self.model_fresh = renewed;
         }
         Ok(FollowStep {
             mask: if self.stopped { Mask::empty() } else { output },
