@@ -216,8 +216,8 @@ pub struct FollowConfig {
     ///
     /// Default 0.3. Why: a camera panning with its object (DAVIS scooter-gray, rollerblade,
     /// bmx-trees) lost the object to a pole, a wall or a tree for good. On the 21 DAVIS clips
-    /// mean J 0.722 → 0.771 (0.2, 0.5 and 0.7 gave 0.764–0.768; leave one clip out 0.762),
-    /// without the network 0.641 → 0.663 (tests/data/follow/README.md).
+    /// mean J 0.722 → 0.771 (0.2, 0.5 and 0.7 gave 0.760–0.766; leave one clip out 0.763),
+    /// without the network 0.641 → 0.664 (tests/data/follow/README.md).
     pub background_lock: Option<f64>,
     /// The learned segmentation's crop and threshold settings.
     pub segment: SegmentConfig,

@@ -39,7 +39,7 @@ pub use warp::{rasterize_polygon, warp_mask};
 
 use serde::{Deserialize, Serialize};
 
-use crate::features::sift::{self, MatchConfig, SiftFeatures};
+use crate::features::sift::{self, Keypoint, MatchConfig, SiftFeatures};
 use crate::features::transform::{
     ransac, RansacConfig, RansacFit, Transform, TransformKind, Translation,
 };
@@ -282,12 +282,19 @@ impl Follower {
         // fit's keypoints move with it (an occluder or the scene behind, taken into the model
         // while it crossed the outline, outvotes the target's own keypoints).
         let mut locked = false;
-        if let (Some(share), Some((t, inl))) = (cfg.background_lock, &fit) {
+        // Twice the inlier threshold: slower relative motion is within the fits' noise.
+        let floor = 2.0 * cfg.ransac_threshold * downscale;
+        let moving = self.relative > floor;
+        // The background's fit is needed only where a lock can be found or the relative
+        // motion updated.
+        let judged = match (cfg.background_lock, &fit) {
+            (Some(share), Some(f)) if moving || self.model_fresh => Some((share, f)),
+            _ => None,
+        };
+        if let Some((share, (t, inl))) = judged {
             if let Some((bg, on_bg)) = self.background_motion(&feats, downscale) {
                 let on = inl.iter().filter(|(_, j)| on_bg[*j]).count() as f64;
-                // Twice the inlier threshold: slower relative motion is within the fits' noise.
-                let floor = 2.0 * cfg.ransac_threshold * downscale;
-                if self.relative > floor && on >= share * inl.len() as f64 {
+                if moving && on >= share * inl.len() as f64 {
                     // Decays, so a target that has really stopped against the background is
                     // taken up again (after ~7 frames per halving of its speed).
                     self.relative *= 0.9;
@@ -693,21 +700,25 @@ fn model_features(
 }
 
 fn select_inside(feats: &SiftFeatures, mask: &Mask) -> SiftFeatures {
-    let mut out = SiftFeatures::default();
-    for (k, d) in feats.keypoints.iter().zip(&feats.descriptors) {
-        if mask.get(k.x.floor() as i32, k.y.floor() as i32) {
-            out.keypoints.push(*k);
-            out.descriptors.push(*d);
-        }
-    }
-    out
+    select(feats, |_, k| {
+        mask.get(k.x.floor() as i32, k.y.floor() as i32)
+    })
 }
 
 /// `feats` without the keypoints at indices `drop`.
 fn without(feats: &SiftFeatures, drop: &[usize]) -> SiftFeatures {
+    let mut keep = vec![true; feats.len()];
+    for &i in drop {
+        keep[i] = false;
+    }
+    select(feats, |i, _| keep[i])
+}
+
+/// The keypoints of `feats` (with their descriptors) that `keep(index, keypoint)` accepts.
+fn select(feats: &SiftFeatures, keep: impl Fn(usize, &Keypoint) -> bool) -> SiftFeatures {
     let mut out = SiftFeatures::default();
     for (i, (k, d)) in feats.keypoints.iter().zip(&feats.descriptors).enumerate() {
-        if !drop.contains(&i) {
+        if keep(i, k) {
             out.keypoints.push(*k);
             out.descriptors.push(*d);
         }
