@@ -9,8 +9,10 @@
 // cache as the clip opens, as in the app); each clip is played `--repeat` times over (default
 // 3) in one sequence, so the keyframes have time to land. fps = frames tracked / wall time from Play to the
 // last frame. Also mean J: per tracked frame, the best mask IoU of the app's records with the
-// ground truth (the tracker's output, not the detector's: what a labeller gets). A benchmark,
-// not a test: nothing fails on a slow run.
+// ground truth (the tracker's output, not the detector's: what a labeller gets). And where a
+// frame's time goes (medians): the worker's detect (with the learned stage's bookkeeping) and
+// track, its whole step, and the page's taking in and drawing of a result. A benchmark, not a
+// test: nothing fails on a slow run.
 //
 //   npm run build && node scripts/bench-learned-fps.mjs [--clips bus,camel] [--policies off,keyframes]
 //     [--repeat N] [--port P]
@@ -88,6 +90,28 @@ function meanJ(page, clip) {
   }, pngs);
 }
 
+/** @param {number[]} xs */
+const median = (xs) => {
+  const s = [...xs].sort((a, b) => a - b);
+  return s.length ? s[Math.floor(s.length / 2)] : NaN;
+};
+
+/**
+ * Medians (ms) of a run's per-frame log: the wall time between two results, the worker's
+ * step (its detect, incl. the learned stage's bookkeeping, and track; `total` adds taking
+ * the frame's pixels in), and the page's taking in and drawing of a result.
+ * @param {{ at: number, detect: number, track: number, total: number, accept: number, render: number }[]} log
+ */
+function split(log) {
+  const wall = log.slice(1).map((e, i) => e.at - log[i].at);
+  const pick = (/** @type {keyof (typeof log)[0]} */ k) => median(log.map((e) => e[k]));
+  return { wall: median(wall), detect: pick('detect'), track: pick('track'), worker: pick('total'), accept: pick('accept'), render: pick('render') };
+}
+
+/** @param {{ wall: number, detect: number, track: number, worker: number, accept: number, render: number }} s */
+const showSplit = (s) =>
+  `median ms: frame ${s.wall.toFixed(1)}, worker ${s.worker.toFixed(1)} (detect ${s.detect.toFixed(1)}, track ${s.track.toFixed(1)}), page ${(s.accept + s.render).toFixed(1)} (take ${s.accept.toFixed(1)}, draw ${s.render.toFixed(1)})`;
+
 /** @param {string} clip */
 const frames = (clip) =>
   readdirSync(join(DAVIS, clip))
@@ -131,12 +155,37 @@ async function run(browser, url, clip, policy) {
     ).flat();
     await page.setInputFiles('#file-images', files);
     const s0 = await until(page, (s) => s.processed >= 1 && !s.playing);
+    // Where a frame's time goes: the worker's own timings per step, and the page's share
+    // (taking a result into the table, drawing the overlay), measured by wrapping the app's
+    // methods (app.js lets them be wrapped from outside).
+    await page.evaluate(() => {
+      const a = /** @type {any} */ (window).__shapetrack.app;
+      /** @type {{ at: number, detect: number, track: number, total: number, accept: number, render: number }[]} */
+      const log = [];
+      /** @type {any} */ (window).__benchLog = log;
+      const accept = a.accept.bind(a);
+      const render = a.render.bind(a);
+      a.accept = (/** @type {any} */ res) => {
+        const t = performance.now();
+        const r = accept(res);
+        log.push({ at: t, ...res.timings, accept: performance.now() - t, render: 0 });
+        return r;
+      };
+      a.render = (/** @type {any[]} */ ...args) => {
+        const t = performance.now();
+        const r = render(...args);
+        const last = log.at(-1);
+        if (last) last.render += performance.now() - t;
+        return r;
+      };
+    });
     const t0 = Date.now();
     await page.keyboard.press('Space');
     const s1 = await until(page, (s) => s.processed === s.frames && !s.playing);
     const secs = (Date.now() - t0) / 1000;
     const j = await meanJ(page, clip);
-    return { clip, policy, frames: s1.processed - s0.processed, fps: (s1.processed - s0.processed) / secs, j, learned: s1.learned, choice: s1.detectorChoice, errors };
+    const log = await page.evaluate(() => /** @type {any} */ (window).__benchLog);
+    return { clip, policy, frames: s1.processed - s0.processed, fps: (s1.processed - s0.processed) / secs, j, learned: s1.learned, choice: s1.detectorChoice, errors, split: split(log) };
   } finally {
     await page.close();
   }
@@ -160,6 +209,7 @@ try {
       console.log(
         `${clip} (${r.frames} frames, ${r.choice}), learned ${policy}: ${r.fps.toFixed(1)} fps, J ${r.j.toFixed(3)}` +
           (policy === 'keyframes' ? `; keyframes done ${l.keyframes}${l.keyframes ? ` (last ${(l.ms / 1000).toFixed(1)} s)` : ''}, frames with learned masks ${l.frames} (replaced ${l.used}, added ${l.added})${l.failed ? `, failed: ${l.failed}` : ''}` : '') +
+          `; ${showSplit(r.split)}` +
           (r.errors.length ? `; page errors: ${r.errors.join('; ')}` : ''),
       );
     }

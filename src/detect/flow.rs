@@ -147,7 +147,8 @@ impl DenseFlow {
     }
 
     /// The flow from `i0` to `i1`, both `w × h` grey images (row-major, any range; the
-    /// settings assume 0–255), written into `out`. Images smaller than a patch get zero flow.
+    /// settings assume 0–255), written into `out`. Images smaller than a patch, and settings
+    /// [`FlowConfig::check`] refuses, get zero flow.
     pub fn compute(&mut self, i0: &[f32], i1: &[f32], w: usize, h: usize, out: &mut FlowField) {
         self.compute_guided(i0, i1, w, h, None, out);
     }
@@ -177,7 +178,9 @@ impl DenseFlow {
         out.v.clear();
         out.v.resize(w * h, 0.0);
         let ps = self.cfg.patch_size as usize;
-        if w < ps || h < ps || i0.len() < w * h || i1.len() < w * h {
+        // Settings `FlowConfig::check` refuses (a detector checks them first) give zero flow:
+        // the patch search's per-column sums hold 32 columns at most.
+        if self.cfg.check().is_err() || w < ps || h < ps || i0.len() < w * h || i1.len() < w * h {
             return;
         }
         // Coarsest scale as DIS picks it: `round(log2(max side / 4 patches))`, so that a
@@ -353,7 +356,10 @@ impl DenseFlow {
         let (fx, fy) = (px.floor(), py.floor());
         let (tx, ty) = (px - fx, py - fy);
         let (bx, by) = (fx as isize, fy as isize);
-        let (mut sd, mut sdd, mut sgx, mut sgy) = (0f32, 0f32, 0f32, 0f32);
+        // Per-column running sums (a patch column per lane), added up at the end: the rows'
+        // updates are then independent across columns and vectorised, where four chains of
+        // dependent additions over all ps² pixels left the loop waiting on each.
+        let (mut ld, mut ldd, mut lgx, mut lgy) = ([0f32; 32], [0f32; 32], [0f32; 32], [0f32; 32]);
         let inside = bx >= 0 && by >= 0 && bx as usize + ps < i1.w && by as usize + ps < i1.h;
         let (w00, w01, w10, w11) = (
             (1.0 - tx) * (1.0 - ty),
@@ -367,28 +373,36 @@ impl DenseFlow {
                 &self.gx.v[(y0 + r) * w + x0..][..ps],
                 &self.gy.v[(y0 + r) * w + x0..][..ps],
             );
+            let (ld, ldd, lgx, lgy) = (
+                &mut ld[..ps],
+                &mut ldd[..ps],
+                &mut lgx[..ps],
+                &mut lgy[..ps],
+            );
             if inside {
                 let a = &i1.v[(by as usize + r) * i1.w + bx as usize..][..ps + 1];
                 let b = &i1.v[(by as usize + r + 1) * i1.w + bx as usize..][..ps + 1];
                 for c in 0..ps {
                     let s = w00 * a[c] + w01 * a[c + 1] + w10 * b[c] + w11 * b[c + 1];
                     let d = s - row0[c];
-                    sd += d;
-                    sdd += d * d;
-                    sgx += grx[c] * d;
-                    sgy += gry[c] * d;
+                    ld[c] += d;
+                    ldd[c] += d * d;
+                    lgx[c] += grx[c] * d;
+                    lgy[c] += gry[c] * d;
                 }
             } else {
                 for c in 0..ps {
                     let s = i1.sample(px + c as f32, py + r as f32);
                     let d = s - row0[c];
-                    sd += d;
-                    sdd += d * d;
-                    sgx += grx[c] * d;
-                    sgy += gry[c] * d;
+                    ld[c] += d;
+                    ldd[c] += d * d;
+                    lgx[c] += grx[c] * d;
+                    lgy[c] += gry[c] * d;
                 }
             }
         }
+        let total = |l: &[f32; 32]| l[..ps].iter().sum::<f32>();
+        let (sd, sdd, sgx, sgy) = (total(&ld), total(&ldd), total(&lgx), total(&lgy));
         (sdd - sd * sd / n, sgx, sgy, sd)
     }
 

@@ -85,3 +85,45 @@ fn tiny_or_flat_images_give_zero_flow_without_panicking() {
         .chain(&out.v)
         .all(|x| x.is_finite() && x.abs() < 1e-3));
 }
+
+#[test]
+fn other_patch_sizes_find_the_shift_too() {
+    // The patch search sums per patch column (up to 32): sizes other than the default 8,
+    // odd ones and the largest allowed included.
+    let (w, h) = (160, 96);
+    let i0 = texture(w, h, 0.0, 0.0);
+    let i1 = texture(w, h, -2.6, 1.2);
+    for (patch_size, patch_stride) in [(5, 3), (12, 6), (32, 16)] {
+        let mut flow = DenseFlow::new(FlowConfig {
+            patch_size,
+            patch_stride,
+            ..FlowConfig::default()
+        });
+        let mut out = FlowField::default();
+        flow.compute(&i0, &i1, w, h, &mut out);
+        let e = mean_error(&out, 2.6, -1.2, 20);
+        assert!(e < 0.3, "patch {patch_size}: mean end-point error {e}");
+    }
+}
+
+#[test]
+fn refused_settings_give_zero_flow_without_panicking() {
+    // `DenseFlow::new` takes any settings; those `FlowConfig::check` refuses (a patch wider
+    // than the search's 32 columns, none at all) must not reach the search.
+    let (w, h) = (96, 64);
+    let (i0, i1) = (texture(w, h, 0.0, 0.0), texture(w, h, -2.0, 0.0));
+    for patch_size in [0, 40] {
+        let cfg = FlowConfig {
+            patch_size,
+            ..FlowConfig::default()
+        };
+        assert!(cfg.check().is_err());
+        let mut flow = DenseFlow::new(cfg);
+        let mut out = FlowField::default();
+        flow.compute(&i0, &i1, w, h, &mut out);
+        assert!(
+            out.u.iter().chain(&out.v).all(|&x| x == 0.0),
+            "patch {patch_size}"
+        );
+    }
+}

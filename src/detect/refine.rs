@@ -117,7 +117,27 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig, hint: Option<&Hint>
     let h = ((ry1 - ry0) / scale).floor().max(1.0) as usize;
     let mut feat = vec![[0f32; 4]; w * h];
     let tex_scale = cfg.texture as f32;
-    let luma = |x: u32, y: u32| frame.gray_at(x, y).unwrap_or(0.0);
+    // Each frame pixel's luma enters the texture sum up to three times (its own difference
+    // and as its left and upper neighbours' neighbour): computed once per call over the
+    // region the cells and their right and lower neighbours cover, with `gray_at`'s formula,
+    // so the sums are what per-pixel calls gave, bit for bit.
+    let (lx0, ly0) = (rx0 as u32, ry0 as u32);
+    let lx1 = (rx1 as u32 + 2).min(frame.width());
+    let ly1 = (ry1 as u32 + 2).min(frame.height());
+    let lw = lx1.saturating_sub(lx0) as usize;
+    let (data, stride, ch) = (frame.data(), frame.stride(), frame.format().channels());
+    let mut lumas = Vec::new();
+    if tex_scale > 0.0 {
+        lumas.reserve(lw * ly1.saturating_sub(ly0) as usize);
+        for y in ly0..ly1 {
+            let row = &data[y as usize * stride..];
+            lumas.extend((lx0..lx1).map(|x| {
+                let i = x as usize * ch;
+                0.299 * row[i] as f32 + 0.587 * row[i + 1] as f32 + 0.114 * row[i + 2] as f32
+            }));
+        }
+    }
+    let luma = |x: u32, y: u32| lumas[(y - ly0) as usize * lw + (x - lx0) as usize];
     let mut inside = vec![false; w * h];
     let mut radial = vec![0f32; w * h];
     let mut hinted = if hint.is_some() {
@@ -136,20 +156,20 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig, hint: Option<&Hint>
             let mut n = 0f32;
             let mut t = 0f32;
             for y in py0..py1.min(frame.height()) {
+                let row = &data[y as usize * stride..];
                 for x in px0..px1.min(frame.width()) {
-                    if let Some(c) = frame.rgb_at(x, y) {
-                        s[0] += c[0] as f32;
-                        s[1] += c[1] as f32;
-                        s[2] += c[2] as f32;
-                        n += 1.0;
-                        if tex_scale > 0.0 {
-                            let l = luma(x, y);
-                            if x + 1 < frame.width() {
-                                t += (luma(x + 1, y) - l).abs();
-                            }
-                            if y + 1 < frame.height() {
-                                t += (luma(x, y + 1) - l).abs();
-                            }
+                    let c = &row[x as usize * ch..][..3];
+                    s[0] += c[0] as f32;
+                    s[1] += c[1] as f32;
+                    s[2] += c[2] as f32;
+                    n += 1.0;
+                    if tex_scale > 0.0 {
+                        let l = luma(x, y);
+                        if x + 1 < frame.width() {
+                            t += (luma(x + 1, y) - l).abs();
+                        }
+                        if y + 1 < frame.height() {
+                            t += (luma(x, y + 1) - l).abs();
                         }
                     }
                 }

@@ -389,14 +389,18 @@ test('bad files are refused with a message, not a crash', async () => {
 // player 60 of 70 → 1). 816 → 820 KB with the follower's check for a fit on the background
 // (`FollowConfig::background_lock`: a second keypoint fit for the background's motion;
 // 815.0 → 817.0 KiB; following a first mask on the 21 DAVIS clips, mean J 0.722 → 0.771).
-test('wasm is at most 820 KB gzipped', () => {
+// 820 → 824 KB with the moving-camera detector's inner loops written to be vectorised (the
+// flow's patch sums, variational refinement and global shift, the refinement's crop: 817.1 →
+// 821.6 KiB; `detect` at 854×480 ×0.70 the time in wasm, its masks unchanged on the 21 DAVIS
+// clips; the app's weights-free rate 11.4 → 15.9 fps, scripts/bench-learned-fps.mjs).
+test('wasm is at most 824 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
   assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
   const bytes = readFileSync(join(dir, wasm[0]));
   const gz = gzipSync(bytes, { level: 9 }).length;
   console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
-  assert.ok(gz <= 820 * 1024, `${gz} bytes gzipped`);
+  assert.ok(gz <= 824 * 1024, `${gz} bytes gzipped`);
 });
 
 test('edits not exported are never replaced without a question: demo, import and closing the tab ask first', async () => {

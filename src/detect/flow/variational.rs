@@ -101,8 +101,6 @@ impl Refiner {
             b.clear();
             b.resize(n, 0.0);
         }
-        const ZETA2: f32 = 0.01;
-        const EPS2: f32 = 1e-6;
         let (delta2, gamma2, alpha2) = (cfg.delta / 2.0, cfg.gamma / 2.0, cfg.alpha / 2.0);
         // The parts of the data terms that do not change with the increment, once per call
         // (the per-iteration loop then needs two square roots and no division per pixel).
@@ -135,73 +133,202 @@ impl Refiner {
             self.gb2[i] = ixy * ixz * g1 + iyy * iyz * g2;
         }
         for _ in 0..cfg.refine_iterations {
-            // Data terms, linearised around the current increment (robust weights).
-            for i in 0..n {
-                let (ix, iy, iz) = (self.ix[i], self.iy[i], self.iz[i]);
-                let (du, dv) = (self.du[i], self.dv[i]);
-                let bn = self.bn[i];
-                let r = iz + ix * du + iy * dv;
-                let wb = delta2 * bn / (r * r * bn + EPS2).sqrt();
-                let rx = self.ixz[i] + self.ixx[i] * du + self.ixy[i] * dv;
-                let ry = self.iyz[i] + self.ixy[i] * du + self.iyy[i] * dv;
-                let wg = gamma2 / (rx * rx * self.g1[i] + ry * ry * self.g2[i] + EPS2).sqrt();
-                self.a11[i] = wb * ix * ix + ZETA2 + wg * self.ga11[i];
-                self.a12[i] = wb * ix * iy + wg * self.ga12[i];
-                self.a22[i] = wb * iy * iy + ZETA2 + wg * self.ga22[i];
-                self.b1[i] = -wb * iz * ix - wg * self.gb1[i];
-                self.b2[i] = -wb * iz * iy - wg * self.gb2[i];
-            }
-            // Smoothness: one robust weight per pixel from the forward differences of the
-            // current flow, shared by its right and lower neighbour links (0 past the border).
-            for y in 0..h {
-                let row = y * w;
-                for x in 0..w {
-                    let i = row + x;
-                    let (tu, tv) = (u[i] + self.du[i], v[i] + self.dv[i]);
-                    let r = row + (x + 1).min(w - 1);
-                    let d = (y + 1).min(h - 1) * w + x;
-                    let (ux, vx) = (u[r] + self.du[r] - tu, v[r] + self.dv[r] - tv);
-                    let (uy, vy) = (u[d] + self.du[d] - tu, v[d] + self.dv[d] - tv);
-                    self.smooth[i] = alpha2 / (ux * ux + uy * uy + vx * vx + vy * vy + EPS2).sqrt();
-                }
-            }
-            // Each pixel gathers its four links: `wx`/`wy` are the weights of the links to its
-            // right and lower neighbours (none on the last column and row).
-            let sm = &self.smooth;
-            let link = |i: usize, x: usize, y: usize| -> (f32, f32, f32, f32) {
-                let wr = if x + 1 < w { sm[i] } else { 0.0 };
-                let wd = if y + 1 < h { sm[i] } else { 0.0 };
-                let wl = if x > 0 { sm[i - 1] } else { 0.0 };
-                let wu = if y > 0 { sm[i - w] } else { 0.0 };
-                (wr, wd, wl, wu)
-            };
-            for y in 0..h {
-                for x in 0..w {
-                    let i = y * w + x;
-                    let (wr, wd, wl, wu) = link(i, x, y);
-                    let at =
-                        |f: &[f32], j: usize, wgt: f32| if wgt > 0.0 { f[j] - f[i] } else { 0.0 };
-                    let gu = wr * at(u, i + (x + 1 < w) as usize, wr)
-                        + wd * at(u, i + if y + 1 < h { w } else { 0 }, wd)
-                        + wl * at(u, i - (x > 0) as usize, wl)
-                        + wu * at(u, i - if y > 0 { w } else { 0 }, wu);
-                    let gv = wr * at(v, i + (x + 1 < w) as usize, wr)
-                        + wd * at(v, i + if y + 1 < h { w } else { 0 }, wd)
-                        + wl * at(v, i - (x > 0) as usize, wl)
-                        + wu * at(v, i - if y > 0 { w } else { 0 }, wu);
-                    let sum = wr + wd + wl + wu;
-                    // The SOR below divides by these: keep their inverses.
-                    self.a11[i] = 1.0 / (self.a11[i] + sum);
-                    self.a22[i] = 1.0 / (self.a22[i] + sum);
-                    self.b1[i] += gu;
-                    self.b2[i] += gv;
-                }
-            }
+            self.data_terms(n, delta2, gamma2);
+            self.smoothness(u, v, w, h, alpha2);
+            self.links(u, v, w, h);
             self.sor(cfg.sor_iterations, w, h);
         }
         for i in 0..n {
             u[i] += self.du[i];
             v[i] += self.dv[i];
+        }
+    }
+}
+
+/// [`Refiner::links`] for a pixel with some links missing (on the border): only those that
+/// exist. Out of line: a frame's border is a small share of its pixels, and the code is not
+/// copied into every place that calls it.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn link_border(
+    sm: &[f32],
+    u: &[f32],
+    v: &[f32],
+    [a11, a22, b1, b2]: [&mut [f32]; 4],
+    w: usize,
+    h: usize,
+    x: usize,
+    y: usize,
+) {
+    let i = y * w + x;
+    let wr = if x + 1 < w { sm[i] } else { 0.0 };
+    let wd = if y + 1 < h { sm[i] } else { 0.0 };
+    let wl = if x > 0 { sm[i - 1] } else { 0.0 };
+    let wu = if y > 0 { sm[i - w] } else { 0.0 };
+    let at = |f: &[f32], j: usize, wgt: f32| if wgt > 0.0 { f[j] - f[i] } else { 0.0 };
+    let gu = wr * at(u, i + (x + 1 < w) as usize, wr)
+        + wd * at(u, i + if y + 1 < h { w } else { 0 }, wd)
+        + wl * at(u, i - (x > 0) as usize, wl)
+        + wu * at(u, i - if y > 0 { w } else { 0 }, wu);
+    let gv = wr * at(v, i + (x + 1 < w) as usize, wr)
+        + wd * at(v, i + if y + 1 < h { w } else { 0 }, wd)
+        + wl * at(v, i - (x > 0) as usize, wl)
+        + wu * at(v, i - if y > 0 { w } else { 0 }, wu);
+    let sum = wr + wd + wl + wu;
+    a11[i] = 1.0 / (a11[i] + sum);
+    a22[i] = 1.0 / (a22[i] + sum);
+    b1[i] += gu;
+    b2[i] += gv;
+}
+
+/// `ZETA2` and `EPS2` of the refinement (OpenCV's): the data terms' regulariser and the
+/// robust penalties' epsilon.
+const ZETA2: f32 = 0.01;
+const EPS2: f32 = 1e-6;
+
+// The loops below are written over slices of one length (and, for the neighbours, over
+// shifted windows of a row) so that they carry no bounds checks or per-pixel branches and are
+// vectorised; each pixel's arithmetic is the same expression, in the same order, as a plain
+// per-pixel loop's, so the results are too, bit for bit.
+impl Refiner {
+    /// The data terms, linearised around the current increment (robust weights): `a11`,
+    /// `a12`, `a22`, `b1`, `b2` from the image derivatives and `du`, `dv`.
+    fn data_terms(&mut self, n: usize, delta2: f32, gamma2: f32) {
+        let (ix, iy, iz) = (&self.ix[..n], &self.iy[..n], &self.iz[..n]);
+        let (du, dv, bn) = (&self.du[..n], &self.dv[..n], &self.bn[..n]);
+        let (ixz, iyz) = (&self.ixz[..n], &self.iyz[..n]);
+        let (ixx, ixy, iyy) = (&self.ixx[..n], &self.ixy[..n], &self.iyy[..n]);
+        let (g1, g2) = (&self.g1[..n], &self.g2[..n]);
+        let (ga11, ga12, ga22) = (&self.ga11[..n], &self.ga12[..n], &self.ga22[..n]);
+        let (gb1, gb2) = (&self.gb1[..n], &self.gb2[..n]);
+        let (a11, a12, a22) = (&mut self.a11[..n], &mut self.a12[..n], &mut self.a22[..n]);
+        let (b1, b2) = (&mut self.b1[..n], &mut self.b2[..n]);
+        for i in 0..n {
+            let (ix, iy, iz) = (ix[i], iy[i], iz[i]);
+            let (du, dv) = (du[i], dv[i]);
+            let bn = bn[i];
+            let r = iz + ix * du + iy * dv;
+            let wb = delta2 * bn / (r * r * bn + EPS2).sqrt();
+            let rx = ixz[i] + ixx[i] * du + ixy[i] * dv;
+            let ry = iyz[i] + ixy[i] * du + iyy[i] * dv;
+            let wg = gamma2 / (rx * rx * g1[i] + ry * ry * g2[i] + EPS2).sqrt();
+            a11[i] = wb * ix * ix + ZETA2 + wg * ga11[i];
+            a12[i] = wb * ix * iy + wg * ga12[i];
+            a22[i] = wb * iy * iy + ZETA2 + wg * ga22[i];
+            b1[i] = -wb * iz * ix - wg * gb1[i];
+            b2[i] = -wb * iz * iy - wg * gb2[i];
+        }
+    }
+
+    /// Smoothness: one robust weight per pixel from the forward differences of the current
+    /// flow `u + du`, `v + dv`, shared by its right and lower neighbour links (a difference
+    /// past the border is 0).
+    fn smoothness(&mut self, u: &[f32], v: &[f32], w: usize, h: usize, alpha2: f32) {
+        let weight = |tu: f32, tv: f32, ru: f32, rv: f32, du_: f32, dv_: f32| {
+            let (ux, vx) = (ru - tu, rv - tv);
+            let (uy, vy) = (du_ - tu, dv_ - tv);
+            alpha2 / (ux * ux + uy * uy + vx * vx + vy * vy + EPS2).sqrt()
+        };
+        let (du, dv) = (&self.du, &self.dv);
+        for y in 0..h {
+            let row = y * w;
+            let down = (y + 1).min(h - 1) * w;
+            let out = &mut self.smooth[row..row + w];
+            let (u0, v0, du0, dv0) = (
+                &u[row..row + w],
+                &v[row..row + w],
+                &du[row..row + w],
+                &dv[row..row + w],
+            );
+            let (ud, vd, dud, dvd) = (
+                &u[down..down + w],
+                &v[down..down + w],
+                &du[down..down + w],
+                &dv[down..down + w],
+            );
+            for x in 0..w - 1 {
+                let (tu, tv) = (u0[x] + du0[x], v0[x] + dv0[x]);
+                out[x] = weight(
+                    tu,
+                    tv,
+                    u0[x + 1] + du0[x + 1],
+                    v0[x + 1] + dv0[x + 1],
+                    ud[x] + dud[x],
+                    vd[x] + dvd[x],
+                );
+            }
+            let x = w - 1;
+            let (tu, tv) = (u0[x] + du0[x], v0[x] + dv0[x]);
+            out[x] = weight(tu, tv, tu, tv, ud[x] + dud[x], vd[x] + dvd[x]);
+        }
+    }
+
+    /// Each pixel gathers its four links (the weights of the links to its right and lower
+    /// neighbours are its own `smooth`, to its left and upper ones theirs; none past the
+    /// border): their pull on the flow joins `b1`, `b2`, their sum the diagonal, whose
+    /// inverse `a11`/`a22` then hold for the SOR.
+    fn links(&mut self, u: &[f32], v: &[f32], w: usize, h: usize) {
+        let sm = &self.smooth;
+        let (a11, a22, b1, b2) = (&mut self.a11, &mut self.a22, &mut self.b1, &mut self.b2);
+        for y in 0..h {
+            let row = y * w;
+            if y == 0 || y + 1 == h || w < 3 {
+                for x in 0..w {
+                    link_border(
+                        sm,
+                        u,
+                        v,
+                        [&mut *a11, &mut *a22, &mut *b1, &mut *b2],
+                        w,
+                        h,
+                        x,
+                        y,
+                    );
+                }
+                continue;
+            }
+            for x in [0, w - 1] {
+                link_border(
+                    sm,
+                    u,
+                    v,
+                    [&mut *a11, &mut *a22, &mut *b1, &mut *b2],
+                    w,
+                    h,
+                    x,
+                    y,
+                );
+            }
+            // Interior: all four links. Their weights (alpha over a square root) are positive
+            // unless `alpha` is 0, where a term is then ±0 instead of +0: the same sums.
+            let r = row + 1..row + w - 1;
+            let (s, sl, su) = (
+                &sm[r.clone()],
+                &sm[row..row + w - 2],
+                &sm[row - w + 1..row - 1],
+            );
+            let (uc, ur, ul) = (&u[r.clone()], &u[row + 2..row + w], &u[row..row + w - 2]);
+            let (ud, uu) = (&u[row + w + 1..row + 2 * w - 1], &u[row - w + 1..row - 1]);
+            let (vc, vr, vl) = (&v[r.clone()], &v[row + 2..row + w], &v[row..row + w - 2]);
+            let (vd, vu) = (&v[row + w + 1..row + 2 * w - 1], &v[row - w + 1..row - 1]);
+            let (a11, a22) = (&mut a11[r.clone()], &mut a22[r.clone()]);
+            let (b1, b2) = (&mut b1[r.clone()], &mut b2[r]);
+            for x in 0..w - 2 {
+                let (wr, wl, wu) = (s[x], sl[x], su[x]);
+                let gu = wr * (ur[x] - uc[x])
+                    + wr * (ud[x] - uc[x])
+                    + wl * (ul[x] - uc[x])
+                    + wu * (uu[x] - uc[x]);
+                let gv = wr * (vr[x] - vc[x])
+                    + wr * (vd[x] - vc[x])
+                    + wl * (vl[x] - vc[x])
+                    + wu * (vu[x] - vc[x]);
+                let sum = wr + wr + wl + wu;
+                a11[x] = 1.0 / (a11[x] + sum);
+                a22[x] = 1.0 / (a22[x] + sum);
+                b1[x] += gu;
+                b2[x] += gv;
+            }
         }
     }
 }
@@ -303,36 +430,64 @@ fn sor_row(
             tv[x] = cur_v[x] + OMEGA * ((sv + b2[x] - a12[x] * nu) * i22[x] - cur_v[x]);
         }
     }
-    let mut x = (y + colour) % 2;
-    while x < w {
-        let i = row + x;
-        if interior && x > 0 && x + 1 < w {
-            du[i] = tu[x];
-            dv[i] = tv[x];
-        } else {
-            // Border pixels: only the links that exist.
-            let sm = sys.sm;
-            let (mut su, mut sv) = (0f32, 0f32);
-            if x + 1 < w {
-                su += sm[i] * du[i + 1];
-                sv += sm[i] * dv[i + 1];
-            }
-            if y + 1 < h {
-                su += sm[i] * du[i + w];
-                sv += sm[i] * dv[i + w];
-            }
-            if x > 0 {
-                su += sm[i - 1] * du[i - 1];
-                sv += sm[i - 1] * dv[i - 1];
-            }
-            if y > 0 {
-                su += sm[i - w] * du[i - w];
-                sv += sm[i - w] * dv[i - w];
-            }
-            let nu = du[i] + OMEGA * ((su + sys.b1[i] - sys.a12[i] * dv[i]) * sys.i11[i] - du[i]);
-            dv[i] += OMEGA * ((sv + sys.b2[i] - sys.a12[i] * nu) * sys.i22[i] - dv[i]);
-            du[i] = nu;
+    // This colour's pixels of the row: the interior ones take the values computed above; the
+    // border ones are computed here from the links they have. Either reads only the other
+    // colour, which this pass leaves as it is, so the order of the two does not matter.
+    let first = (y + colour) % 2;
+    if interior {
+        // A select over the whole row (vectorised), not a strided copy.
+        let (du_row, dv_row) = (&mut du[row + 1..row + w - 1], &mut dv[row + 1..row + w - 1]);
+        let (tu, tv) = (&tu[1..w - 1], &tv[1..w - 1]);
+        for k in 0..w - 2 {
+            // Pixel x = k + 1 is of this colour when x % 2 == first.
+            let take = (k + 1 + first) % 2 == 0;
+            du_row[k] = if take { tu[k] } else { du_row[k] };
+            dv_row[k] = if take { tv[k] } else { dv_row[k] };
         }
-        x += 2;
+        for x in [0, w - 1] {
+            if x % 2 == first {
+                sor_border(sys, du, dv, w, h, y, x);
+            }
+        }
+    } else {
+        for x in (first..w).step_by(2) {
+            sor_border(sys, du, dv, w, h, y, x);
+        }
     }
+}
+
+/// [`sor_row`]'s update of a border pixel: only the links that exist. Out of line, as
+/// [`link_border`].
+#[inline(never)]
+fn sor_border(
+    sys: &System,
+    du: &mut [f32],
+    dv: &mut [f32],
+    w: usize,
+    h: usize,
+    y: usize,
+    x: usize,
+) {
+    let i = y * w + x;
+    let sm = sys.sm;
+    let (mut su, mut sv) = (0f32, 0f32);
+    if x + 1 < w {
+        su += sm[i] * du[i + 1];
+        sv += sm[i] * dv[i + 1];
+    }
+    if y + 1 < h {
+        su += sm[i] * du[i + w];
+        sv += sm[i] * dv[i + w];
+    }
+    if x > 0 {
+        su += sm[i - 1] * du[i - 1];
+        sv += sm[i - 1] * dv[i - 1];
+    }
+    if y > 0 {
+        su += sm[i - w] * du[i - w];
+        sv += sm[i - w] * dv[i - w];
+    }
+    let nu = du[i] + OMEGA * ((su + sys.b1[i] - sys.a12[i] * dv[i]) * sys.i11[i] - du[i]);
+    dv[i] += OMEGA * ((sv + sys.b2[i] - sys.a12[i] * nu) * sys.i22[i] - dv[i]);
+    du[i] = nu;
 }

@@ -117,25 +117,48 @@ fn global_shift(a: &Gray, b: &Gray) -> (isize, isize) {
     if a.w <= 2 * m + 4 || a.h <= 2 * m + 4 {
         return (0, 0);
     }
-    let band: Vec<Vec<bool>> = (m..a.h - m)
+    // The band as runs of columns per row (a row crosses it whole, or in two runs beside the
+    // centre): the sums below then run over plain slices, without a test per pixel.
+    let rows: Vec<(usize, Vec<(usize, usize)>)> = (m..a.h - m)
         .map(|y| {
-            (m..a.w - m)
-                .map(|x| periphery(x as f64, y as f64, a.w, a.h) >= PERIPHERY_BAND)
-                .collect()
+            let mut runs: Vec<(usize, usize)> = Vec::new();
+            for x in m..a.w - m {
+                if periphery(x as f64, y as f64, a.w, a.h) < PERIPHERY_BAND {
+                    continue;
+                }
+                match runs.last_mut() {
+                    Some(r) if r.1 == x => r.1 = x + 1,
+                    _ => runs.push((x, x + 1)),
+                }
+            }
+            (y, runs)
         })
         .collect();
     let mut best = ((0, 0), f32::INFINITY);
     for dy in -GLOBAL..=GLOBAL {
         for dx in -GLOBAL..=GLOBAL {
-            let mut s = 0.0;
-            for (j, y) in (m..a.h - m).enumerate() {
-                let yb = (y as isize + dy) as usize;
-                for (i, x) in (m..a.w - m).enumerate() {
-                    if band[j][i] {
-                        s += (a.at(x, y) - b.at((x as isize + dx) as usize, yb)).abs();
+            // Eight running sums, added up at the end: one chain of dependent additions
+            // would leave the loop waiting on each; eight are vectorised.
+            let mut lanes = [0f32; 8];
+            for (y, runs) in &rows {
+                let yb = (*y as isize + dy) as usize;
+                let (ra, rb) = (&a.v[y * a.w..][..a.w], &b.v[yb * b.w..][..b.w]);
+                for &(x0, x1) in runs {
+                    let xb = (x0 as isize + dx) as usize;
+                    let (pa, pb) = (&ra[x0..x1], &rb[xb..xb + (x1 - x0)]);
+                    let (ca, cb) = (pa.chunks_exact(8), pb.chunks_exact(8));
+                    let (ta, tb) = (ca.remainder(), cb.remainder());
+                    for (qa, qb) in ca.zip(cb) {
+                        for k in 0..8 {
+                            lanes[k] += (qa[k] - qb[k]).abs();
+                        }
+                    }
+                    for (k, (p, q)) in ta.iter().zip(tb).enumerate() {
+                        lanes[k] += (p - q).abs();
                     }
                 }
             }
+            let s: f32 = lanes.iter().sum();
             // A slight preference for small shifts breaks ties on flat frames.
             let s = s * (1.0 + 0.002 * (dx.abs() + dy.abs()) as f32);
             if s < best.1 {
@@ -153,6 +176,15 @@ fn corners(g: &Gray) -> Vec<(usize, usize)> {
     if g.w <= 2 * b || g.h <= 2 * b {
         return out;
     }
+    // The central differences once per pixel, not once per window that holds it (25 times):
+    // the same values, summed in the same order below.
+    let (mut gxs, mut gys) = (vec![0f32; g.w * g.h], vec![0f32; g.w * g.h]);
+    for y in 1..g.h - 1 {
+        for x in 1..g.w - 1 {
+            gxs[y * g.w + x] = g.at(x + 1, y) - g.at(x - 1, y);
+            gys[y * g.w + x] = g.at(x, y + 1) - g.at(x, y - 1);
+        }
+    }
     let mut cy = b;
     while cy < g.h - b {
         let mut cx = b;
@@ -162,9 +194,9 @@ fn corners(g: &Gray) -> Vec<(usize, usize)> {
                 for x in cx..(cx + CELL).min(g.w - b) {
                     let (mut sxx, mut syy, mut sxy) = (0f32, 0f32, 0f32);
                     for yy in y - 2..=y + 2 {
-                        for xx in x - 2..=x + 2 {
-                            let gx = g.at(xx + 1, yy) - g.at(xx - 1, yy);
-                            let gy = g.at(xx, yy + 1) - g.at(xx, yy - 1);
+                        let (rx, ry) =
+                            (&gxs[yy * g.w + x - 2..][..5], &gys[yy * g.w + x - 2..][..5]);
+                        for (&gx, &gy) in rx.iter().zip(ry) {
                             sxx += gx * gx;
                             syy += gy * gy;
                             sxy += gx * gy;
