@@ -34,6 +34,7 @@ mod config;
 mod variational;
 
 pub use config::FlowConfig;
+use config::MAX_PATCH;
 use variational::Refiner;
 
 /// A grey image (or one flow component) of one pyramid scale.
@@ -179,7 +180,7 @@ impl DenseFlow {
         out.v.resize(w * h, 0.0);
         let ps = self.cfg.patch_size as usize;
         // Settings `FlowConfig::check` refuses (a detector checks them first) give zero flow:
-        // the patch search's per-column sums hold 32 columns at most.
+        // the patch search's per-column sums hold `MAX_PATCH` columns at most.
         if self.cfg.check().is_err() || w < ps || h < ps || i0.len() < w * h || i1.len() < w * h {
             return;
         }
@@ -359,7 +360,12 @@ impl DenseFlow {
         // Per-column running sums (a patch column per lane), added up at the end: the rows'
         // updates are then independent across columns and vectorised, where four chains of
         // dependent additions over all ps² pixels left the loop waiting on each.
-        let (mut ld, mut ldd, mut lgx, mut lgy) = ([0f32; 32], [0f32; 32], [0f32; 32], [0f32; 32]);
+        let (mut ld, mut ldd, mut lgx, mut lgy) = (
+            [0f32; MAX_PATCH],
+            [0f32; MAX_PATCH],
+            [0f32; MAX_PATCH],
+            [0f32; MAX_PATCH],
+        );
         let inside = bx >= 0 && by >= 0 && bx as usize + ps < i1.w && by as usize + ps < i1.h;
         let (w00, w01, w10, w11) = (
             (1.0 - tx) * (1.0 - ty),
@@ -401,7 +407,7 @@ impl DenseFlow {
                 }
             }
         }
-        let total = |l: &[f32; 32]| l[..ps].iter().sum::<f32>();
+        let total = |l: &[f32; MAX_PATCH]| l[..ps].iter().sum::<f32>();
         let (sd, sdd, sgx, sgy) = (total(&ld), total(&ldd), total(&lgx), total(&lgy));
         (sdd - sd * sd / n, sgx, sgy, sd)
     }

@@ -11,6 +11,7 @@
 pub mod background;
 pub mod components;
 pub mod flow;
+mod gray;
 pub mod maxflow;
 pub mod morphology;
 pub mod moving;

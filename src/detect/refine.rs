@@ -34,10 +34,11 @@ mod config;
 mod mixture;
 
 use super::components::{Components, Connectivity};
+use super::gray::gray_row;
 use super::maxflow::{FlowGraph, INFINITE};
 use super::DetectError;
 use crate::features::color::{joint_palette, ColorConfig, ColorSample};
-use crate::frame::{BBox, Frame, Mask, Point};
+use crate::frame::{BBox, Frame, Mask, PixelFormat, Point};
 
 pub use box_refiner::BoxRefiner;
 pub use config::RefineConfig;
@@ -119,8 +120,9 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig, hint: Option<&Hint>
     let tex_scale = cfg.texture as f32;
     // Each frame pixel's luma enters the texture sum up to three times (its own difference
     // and as its left and upper neighbours' neighbour): computed once per call over the
-    // region the cells and their right and lower neighbours cover, with `gray_at`'s formula,
-    // so the sums are what per-pixel calls gave, bit for bit.
+    // region the cells and their right and lower neighbours cover, by the detectors' shared
+    // grey conversion (`Frame::gray_at`'s expression), so the sums are what per-pixel calls
+    // gave, bit for bit.
     let (lx0, ly0) = (rx0 as u32, ry0 as u32);
     let lx1 = (rx1 as u32 + 2).min(frame.width());
     let ly1 = (ry1 as u32 + 2).min(frame.height());
@@ -128,13 +130,13 @@ fn make_crop(frame: &Frame, bbox: &BBox, cfg: &RefineConfig, hint: Option<&Hint>
     let (data, stride, ch) = (frame.data(), frame.stride(), frame.format().channels());
     let mut lumas = Vec::new();
     if tex_scale > 0.0 {
-        lumas.reserve(lw * ly1.saturating_sub(ly0) as usize);
-        for y in ly0..ly1 {
-            let row = &data[y as usize * stride..];
-            lumas.extend((lx0..lx1).map(|x| {
-                let i = x as usize * ch;
-                0.299 * row[i] as f32 + 0.587 * row[i + 1] as f32 + 0.114 * row[i + 2] as f32
-            }));
+        lumas.resize(lw * ly1.saturating_sub(ly0) as usize, 0.0);
+        for (y, out) in (ly0..ly1).zip(lumas.chunks_exact_mut(lw.max(1))) {
+            let src = &data[y as usize * stride + lx0 as usize * ch..][..lw * ch];
+            match frame.format() {
+                PixelFormat::Rgb8 => gray_row::<3>(src, out),
+                PixelFormat::Rgba8 => gray_row::<4>(src, out),
+            }
         }
     }
     let luma = |x: u32, y: u32| lumas[(y - ly0) as usize * lw + (x - lx0) as usize];

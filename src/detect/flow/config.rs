@@ -2,6 +2,10 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Largest [`FlowConfig::patch_size`]: the patch search keeps a running sum per patch column,
+/// in arrays of this length.
+pub(in crate::detect) const MAX_PATCH: usize = 32;
+
 /// Settings of the dense flow.
 #[cfg_attr(target_arch = "wasm32", derive(tsify::Tsify), tsify(missing_as_null))]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,7 +48,7 @@ impl Default for FlowConfig {
 impl FlowConfig {
     /// Checks every setting: `Err((field, value, reason))`.
     pub fn check(&self) -> Result<(), (&'static str, f64, &'static str)> {
-        if !(4..=32).contains(&self.patch_size) {
+        if !(4..=MAX_PATCH as u32).contains(&self.patch_size) {
             return Err((
                 "flow.patch_size",
                 self.patch_size as f64,

@@ -3,6 +3,7 @@
 //! grey working frames it is measured on, and [`CameraJudge`], which tells moving-camera
 //! footage from static.
 
+use crate::detect::gray::gray;
 use crate::features::transform::{ransac, RansacConfig, Transform, TransformKind};
 use crate::frame::{Frame, Point};
 
@@ -67,7 +68,7 @@ pub(super) fn downscale(frame: &Frame, scale: usize) -> Gray {
                 let mut s = 0.0;
                 for xx in x * scale..(x * scale + scale).min(fw) {
                     let p = &row[xx * c..xx * c + 3];
-                    s += 0.299 * p[0] as f32 + 0.587 * p[1] as f32 + 0.114 * p[2] as f32;
+                    s += gray(p[0], p[1], p[2]);
                 }
                 v[y * w + x] += s * k;
             }
