@@ -97,20 +97,40 @@ const median = (xs) => {
 };
 
 /**
+ * @typedef {{ at: number, detect: number, track: number, total: number, accept: number, render: number, running: boolean }} LogEntry
+ *   one result: when the page took it, the worker's timings, the page's, and whether a
+ *   keyframe was under way as the worker finished the frame
+ */
+
+/**
  * Medians (ms) of a run's per-frame log: the wall time between two results, the worker's
  * step (its detect, incl. the learned stage's bookkeeping, and track; `total` adds taking
- * the frame's pixels in), and the page's taking in and drawing of a result.
- * @param {{ at: number, detect: number, track: number, total: number, accept: number, render: number }[]} log
+ * the frame's pixels in), and the page's taking in and drawing of a result; and the worker's
+ * step on the frames a keyframe ran beside (`busy`, with their share) and the others
+ * (`idle`): what the net's inference costs the tracker while it runs.
+ * @param {LogEntry[]} log
  */
 function split(log) {
   const wall = log.slice(1).map((e, i) => e.at - log[i].at);
-  const pick = (/** @type {keyof (typeof log)[0]} */ k) => median(log.map((e) => e[k]));
-  return { wall: median(wall), detect: pick('detect'), track: pick('track'), worker: pick('total'), accept: pick('accept'), render: pick('render') };
+  const pick = (/** @type {'detect' | 'track' | 'total' | 'accept' | 'render'} */ k, l = log) => median(l.map((e) => e[k]));
+  const busy = log.filter((e) => e.running);
+  return {
+    wall: median(wall),
+    detect: pick('detect'),
+    track: pick('track'),
+    worker: pick('total'),
+    accept: pick('accept'),
+    render: pick('render'),
+    busyShare: log.length ? busy.length / log.length : 0,
+    busy: pick('total', busy),
+    idle: pick('total', log.filter((e) => !e.running)),
+  };
 }
 
-/** @param {{ wall: number, detect: number, track: number, worker: number, accept: number, render: number }} s */
+/** @param {ReturnType<typeof split>} s */
 const showSplit = (s) =>
-  `median ms: frame ${s.wall.toFixed(1)}, worker ${s.worker.toFixed(1)} (detect ${s.detect.toFixed(1)}, track ${s.track.toFixed(1)}), page ${(s.accept + s.render).toFixed(1)} (take ${s.accept.toFixed(1)}, draw ${s.render.toFixed(1)})`;
+  `median ms: frame ${s.wall.toFixed(1)}, worker ${s.worker.toFixed(1)} (detect ${s.detect.toFixed(1)}, track ${s.track.toFixed(1)}), page ${(s.accept + s.render).toFixed(1)} (take ${s.accept.toFixed(1)}, draw ${s.render.toFixed(1)})` +
+  (s.busyShare > 0 ? `; worker beside a keyframe ${s.busy.toFixed(1)} (${(100 * s.busyShare).toFixed(0)} % of frames), without ${s.idle.toFixed(1)}` : '');
 
 /** @param {string} clip */
 const frames = (clip) =>
@@ -160,7 +180,7 @@ async function run(browser, url, clip, policy) {
     // methods (app.js lets them be wrapped from outside).
     await page.evaluate(() => {
       const a = /** @type {any} */ (window).__shapetrack.app;
-      /** @type {{ at: number, detect: number, track: number, total: number, accept: number, render: number }[]} */
+      /** @type {object[]} */
       const log = [];
       /** @type {any} */ (window).__benchLog = log;
       const accept = a.accept.bind(a);
@@ -168,7 +188,7 @@ async function run(browser, url, clip, policy) {
       a.accept = (/** @type {any} */ res) => {
         const t = performance.now();
         const r = accept(res);
-        log.push({ at: t, ...res.timings, accept: performance.now() - t, render: 0 });
+        log.push({ at: t, ...res.timings, accept: performance.now() - t, render: 0, running: !!res.learned?.running });
         return r;
       };
       a.render = (/** @type {any[]} */ ...args) => {
