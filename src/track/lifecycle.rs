@@ -107,6 +107,9 @@ pub struct Track {
     evidence: f64,
     /// Consecutive frames without a match (0 when matched this or the previous frame).
     misses: u32,
+    /// Box detections are completed like masks: this sequence's detector boxes visible parts
+    /// (see [`super::Config::complete_cut_boxes`]; set by the tracker each frame).
+    boxes_cut: bool,
     /// Frame of the last match (tracker frame numbers, 1-based).
     last_frame: u32,
     /// The last matched detection.
@@ -293,6 +296,7 @@ impl Track {
             hits: 1,
             evidence: 0.0,
             misses: 0,
+            boxes_cut: false,
             last_frame: frame,
             last: det.clone(),
             features: Some(features.clone()),
@@ -356,7 +360,7 @@ impl Track {
             1.0
         };
         let whole = ratio >= cfg.appearance.whole_ratio;
-        let amodal = cfg.amodal && det.mask.is_some();
+        let amodal = cfg.amodal && (det.mask.is_some() || self.boxes_cut);
         let z = if amodal {
             // The last detection tells which side stands still if it is recent; after a longer
             // gap the shape is reappearing and the occlusion that cut the last views is over.
@@ -419,6 +423,12 @@ impl Track {
         self.last = det.clone();
         self.features = Some(features.clone());
         Ok(())
+    }
+
+    /// Whether box detections are completed like masks from now on (the sequence's detector
+    /// boxes visible parts: [`super::Config::complete_cut_boxes`]).
+    pub(crate) fn set_boxes_cut(&mut self, v: bool) {
+        self.boxes_cut = v;
     }
 
     /// The track's latest appearance is `a`, and its reference appearance too when the shape

@@ -39,6 +39,7 @@ mod camera;
 pub mod coasting;
 pub mod config;
 pub mod cost;
+mod cut_views;
 mod describe;
 mod estimate;
 pub mod features;

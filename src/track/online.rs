@@ -108,6 +108,8 @@ pub struct Tracker {
     /// The frame's cheap pair terms, kept between its two scorings (see `update`); emptied
     /// at each frame, its buffers reused.
     cheap: CheapTerms,
+    /// Whether the detector boxes visible parts ([`Config::complete_cut_boxes`]).
+    cut: super::cut_views::CutJudge,
 }
 
 impl std::fmt::Debug for Tracker {
@@ -161,6 +163,7 @@ impl Tracker {
             camera: Camera::default(),
             noise: NoiseFit::default(),
             cheap: CheapTerms::default(),
+            cut: Default::default(),
         })
     }
 
@@ -282,6 +285,14 @@ impl Tracker {
             t.predict();
             t.camera
                 .follow(&mut t.tracks, &dets, t.config.camera_motion);
+            if t.config.amodal && t.config.complete_cut_boxes {
+                let boxes: Vec<BBox> = detections.iter().map(|d| d.bbox).collect();
+                t.cut.observe(&boxes);
+                let cut = t.cut.cuts();
+                for tr in t.tracks.iter_mut() {
+                    tr.set_boxes_cut(cut);
+                }
+            }
             frame_regions(&t.config, &t.tracks, &dets, frame.is_some())
         });
         // The cheap terms of the pairs, when `describe` scores them by geometry first, are

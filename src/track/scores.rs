@@ -77,21 +77,21 @@ pub struct Thresholds {
 
 /// The last `cap` values, kept sorted too, for quantiles.
 #[derive(Debug, Clone, Default)]
-struct Window {
+pub(crate) struct Window {
     order: VecDeque<f64>,
     sorted: Vec<f64>,
     cap: usize,
 }
 
 impl Window {
-    fn new(cap: usize) -> Self {
+    pub(crate) fn new(cap: usize) -> Self {
         Self {
             cap: cap.max(1),
             ..Self::default()
         }
     }
 
-    fn push(&mut self, v: f64) {
+    pub(crate) fn push(&mut self, v: f64) {
         if !v.is_finite() {
             return;
         }
@@ -108,12 +108,12 @@ impl Window {
         self.sorted.insert(i, v);
     }
 
-    fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.sorted.len()
     }
 
     /// The lower `q`-quantile (`None` when empty).
-    fn quantile(&self, q: f64) -> Option<f64> {
+    pub(crate) fn quantile(&self, q: f64) -> Option<f64> {
         let n = self.sorted.len();
         if n == 0 {
             return None;
