@@ -285,7 +285,10 @@ impl Tracker {
             t.predict();
             t.camera
                 .follow(&mut t.tracks, &dets, t.config.camera_motion);
-            if t.config.amodal && t.config.complete_cut_boxes {
+            // Mask detections are completed anyway: the judgement is only needed (and its
+            // cost only paid) for frames with box detections.
+            let boxes_only = detections.iter().any(|d| d.mask.is_none());
+            if t.config.amodal && t.config.complete_cut_boxes && boxes_only {
                 let boxes: Vec<BBox> = detections.iter().map(|d| d.bbox).collect();
                 t.cut.observe(&boxes);
                 let cut = t.cut.cuts();
