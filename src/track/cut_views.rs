@@ -12,7 +12,8 @@
 //! boxes and 0.64 or more on all 354 sequences of MOT15, SportsMOT and BDD100K under every
 //! detector model; the crowd's own amodal boxes, with or without 10 % noise, give 0.99–1.02.
 
-use super::scores::Window;
+use std::collections::VecDeque;
+
 use crate::frame::BBox;
 
 /// Samples each side keeps (the latest): a long video's detector may change.
@@ -31,6 +32,67 @@ const CUT_CLEAR: f64 = 0.05;
 /// The detector boxes visible parts when the hidden views' lower-quartile aspect (h / w) is
 /// below this share of the clear views'.
 const CUT_ASPECT: f64 = 0.6;
+/// Histogram bins per unit of ln(aspect): a quantile is off by at most half a bin, 0.2 %,
+/// far inside the judgement's margins (0.44–0.56 against ≥ 0.64 of `CUT_ASPECT`'s 0.6).
+const BINS_PER_NAT: f64 = 256.0;
+/// Aspects are clamped to `[1 / CUT_SPAN, CUT_SPAN]` (a 64 : 1 box is a sliver either way).
+const CUT_SPAN: f64 = 64.0;
+
+/// The latest `CUT_CAP` aspects as a histogram of ln(aspect): pushing is O(1) and a quantile
+/// one pass over the fixed bins, where a sorted window paid a shift of up to its whole length
+/// per sample — the judge's samples grow with the detections, so its cost stays linear in them.
+#[derive(Debug, Clone)]
+struct AspectWindow {
+    order: VecDeque<u16>,
+    counts: Vec<u32>,
+}
+
+impl AspectWindow {
+    fn new() -> Self {
+        let bins = (2.0 * CUT_SPAN.ln() * BINS_PER_NAT).ceil() as usize + 1;
+        Self {
+            order: VecDeque::with_capacity(CUT_CAP),
+            counts: vec![0; bins],
+        }
+    }
+
+    fn push(&mut self, aspect: f64) {
+        if !aspect.is_finite() || aspect <= 0.0 {
+            return;
+        }
+        let top = self.counts.len() - 1;
+        let b = ((aspect.ln() + CUT_SPAN.ln()) * BINS_PER_NAT).round();
+        let b = (b.max(0.0) as usize).min(top);
+        if self.order.len() == CUT_CAP {
+            if let Some(old) = self.order.pop_front() {
+                self.counts[old as usize] -= 1;
+            }
+        }
+        self.order.push_back(b as u16);
+        self.counts[b] += 1;
+    }
+
+    fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    /// The lower `q`-quantile, as its bin's centre (`None` when empty).
+    fn quantile(&self, q: f64) -> Option<f64> {
+        let n = self.order.len();
+        if n == 0 {
+            return None;
+        }
+        let k = ((q.clamp(0.0, 1.0) * (n - 1) as f64).floor() as usize).min(n - 1);
+        let mut seen = 0usize;
+        for (b, &c) in self.counts.iter().enumerate() {
+            seen += c as usize;
+            if seen > k {
+                return Some((b as f64 / BINS_PER_NAT - CUT_SPAN.ln()).exp());
+            }
+        }
+        None
+    }
+}
 
 /// Whether the detector boxes the visible part of a partly hidden person, judged from each
 /// frame's detections alone (no tracks): a visible-part detector cuts a person behind from
@@ -42,35 +104,62 @@ const CUT_ASPECT: f64 = 0.6;
 #[derive(Debug, Clone)]
 pub(crate) struct CutJudge {
     /// Aspects of the detections that overlap no other.
-    free: Window,
+    free: AspectWindow,
     /// Aspects of the detections covered at least `CUT_HIDDEN_SHARE`.
-    hidden: Window,
+    hidden: AspectWindow,
     /// Aspects of the detections covered less than `CUT_CLEAR`.
-    clear: Window,
+    clear: AspectWindow,
 }
 
 impl Default for CutJudge {
     fn default() -> Self {
         Self {
-            free: Window::new(CUT_CAP),
-            hidden: Window::new(CUT_CAP),
-            clear: Window::new(CUT_CAP),
+            free: AspectWindow::new(),
+            hidden: AspectWindow::new(),
+            clear: AspectWindow::new(),
         }
     }
+}
+
+/// The pairs `(i, j)`, `i < j`, of `boxes` whose horizontal extents overlap (a positive
+/// length), by a sweep over the boxes sorted by left edge: a crowd's people overlap only a
+/// few neighbours, so this is near linear where all pairs were quadratic. Every pair the
+/// judge needs overlaps horizontally (an expected whole box keeps its detection's width).
+fn x_overlapping_pairs(boxes: &[&BBox]) -> Vec<(usize, usize)> {
+    let mut by_x: Vec<usize> = (0..boxes.len()).collect();
+    by_x.sort_by(|&a, &b| boxes[a].x.total_cmp(&boxes[b].x));
+    let mut pairs = Vec::new();
+    for (n, &i) in by_x.iter().enumerate() {
+        let right = boxes[i].x2();
+        for &j in &by_x[n + 1..] {
+            if boxes[j].x >= right {
+                break;
+            }
+            pairs.push((i.min(j), i.max(j)));
+        }
+    }
+    pairs
 }
 
 impl CutJudge {
     /// Takes one frame's detection boxes.
     pub(crate) fn observe(&mut self, boxes: &[BBox]) {
-        let ok: Vec<&BBox> = boxes.iter().filter(|b| b.w > 0.0 && b.h > 0.0).collect();
-        for (i, b) in ok.iter().enumerate() {
-            let alone = ok
-                .iter()
-                .enumerate()
-                .all(|(j, o)| j == i || o.intersection_area(b) <= 0.0);
-            if alone {
-                self.free.push(b.h / b.w);
+        let ok: Vec<&BBox> = boxes
+            .iter()
+            .filter(|b| {
+                b.w > 0.0 && b.h > 0.0 && [b.x, b.y, b.w, b.h].iter().all(|v| v.is_finite())
+            })
+            .collect();
+        let pairs = x_overlapping_pairs(&ok);
+        let mut alone = vec![true; ok.len()];
+        for &(i, j) in &pairs {
+            if ok[i].intersection_area(ok[j]) > 0.0 {
+                alone[i] = false;
+                alone[j] = false;
             }
+        }
+        for (b, _) in ok.iter().zip(&alone).filter(|(_, &a)| a) {
+            self.free.push(b.h / b.w);
         }
         let a0 = match self.free.quantile(0.5) {
             Some(a) if self.free.len() >= CUT_MIN_FREE => a,
@@ -80,16 +169,18 @@ impl CutJudge {
             .iter()
             .map(|b| BBox::new(b.x, b.y, b.w, b.h.max(b.w * a0)))
             .collect();
-        for (i, b) in ok.iter().enumerate() {
-            let e = &full[i];
-            let bottom = e.y + e.h;
-            let area = e.w * e.h;
-            let f = ok
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i && full[j].y + full[j].h > bottom)
-                .map(|(_, o)| o.intersection_area(e) / area)
-                .fold(0.0, f64::max);
+        // Each detection's largest share covered by one nearer detection.
+        let mut covered = vec![0.0f64; ok.len()];
+        for &(i, j) in &pairs {
+            for (me, other) in [(i, j), (j, i)] {
+                let e = &full[me];
+                if full[other].y + full[other].h > e.y + e.h {
+                    let f = ok[other].intersection_area(e) / (e.w * e.h);
+                    covered[me] = covered[me].max(f);
+                }
+            }
+        }
+        for (b, &f) in ok.iter().zip(&covered) {
             if f >= CUT_HIDDEN_SHARE {
                 self.hidden.push(b.h / b.w);
             } else if f < CUT_CLEAR {
@@ -167,5 +258,81 @@ mod tests {
             ]);
         }
         assert!(!j.cuts());
+    }
+
+    /// A small deterministic generator in [0, 1).
+    fn uniform(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn the_sweep_finds_every_horizontally_overlapping_pair() {
+        let mut st = 3u64;
+        for n in [0usize, 1, 2, 7, 60] {
+            let boxes: Vec<BBox> = (0..n)
+                .map(|k| {
+                    // Some boxes share a left edge or touch another's right edge exactly.
+                    let x = if k % 5 == 0 {
+                        100.0
+                    } else {
+                        (uniform(&mut st) * 800.0).round()
+                    };
+                    BBox::new(
+                        x,
+                        uniform(&mut st) * 500.0,
+                        1.0 + (uniform(&mut st) * 90.0).round(),
+                        50.0,
+                    )
+                })
+                .collect();
+            let refs: Vec<&BBox> = boxes.iter().collect();
+            let mut got = x_overlapping_pairs(&refs);
+            got.sort_unstable();
+            let mut want = Vec::new();
+            for i in 0..n {
+                for j in i + 1..n {
+                    let (a, b) = (&boxes[i], &boxes[j]);
+                    if a.x2().min(b.x2()) - a.x.max(b.x) > 0.0 {
+                        want.push((i, j));
+                    }
+                }
+            }
+            assert_eq!(got, want, "{n} boxes");
+        }
+    }
+
+    #[test]
+    fn the_aspect_window_keeps_the_latest_samples_and_their_quantiles() {
+        let mut w = AspectWindow::new();
+        assert_eq!(w.quantile(0.5), None);
+        let mut st = 11u64;
+        let mut all = Vec::new();
+        for _ in 0..(CUT_CAP + 1000) {
+            let a = (uniform(&mut st) * 6.0 - 3.0).exp();
+            w.push(a);
+            all.push(a);
+        }
+        // Not finite or not positive: ignored.
+        w.push(f64::NAN);
+        w.push(-1.0);
+        assert_eq!(w.len(), CUT_CAP);
+        let mut latest = all[all.len() - CUT_CAP..].to_vec();
+        latest.sort_by(f64::total_cmp);
+        for q in [0.0, 0.25, 0.5, 0.9, 1.0] {
+            let k = (q * (CUT_CAP - 1) as f64).floor() as usize;
+            let got = w.quantile(q).unwrap();
+            assert!(
+                (got / latest[k]).ln().abs() <= 0.5 / BINS_PER_NAT + 1e-12,
+                "q {q}: {got} vs {}",
+                latest[k]
+            );
+        }
+        // Beyond the span: clamped to the end bins.
+        let mut e = AspectWindow::new();
+        e.push(1e9);
+        assert!((e.quantile(0.5).unwrap() / CUT_SPAN).ln().abs() <= 1.0 / BINS_PER_NAT);
     }
 }
