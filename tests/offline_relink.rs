@@ -544,6 +544,43 @@ fn a_coasted_tail_does_not_block_a_join() {
     assert_eq!(frames, (1..=90).collect::<HashSet<u32>>());
 }
 
+/// A track coasts for seven frames past its last observation (frame 25) while the object is
+/// found again under a new id at frame 26, seen to frame 30, and coasted by that id in its
+/// own miss (31–37), seen again at frame 60 (a gap too long to fill). Joined, both ids' coasted shapes of frames 31
+/// and 32 fall on one identity: one shape per frame is kept, the newer track's prediction
+/// (it rests on the later view). The online pass on SportsMOT with a tighter gate made this.
+#[test]
+fn overlapping_coasted_shapes_of_joined_tracks_keep_one_per_frame() {
+    let pos = |f: f64| Point::new(50.0 + 4.0 * f, 200.0);
+    let off = Point::new(0.0, 40.0);
+    let mut shapes = track(3, 1..=25, pos);
+    shapes.extend((26..=32).map(|f| coasted(3, f, pos(f64::from(f)) + off)));
+    shapes.extend(track(13, 26..=30, pos));
+    shapes.extend((31..=37).map(|f| coasted(13, f, pos(f64::from(f)))));
+    shapes.extend(track(13, 60..=80, pos));
+    let mut config = OfflineConfig::default();
+    config.smooth.enabled = false;
+    let out = run(shapes, &config, 25.0);
+    assert_eq!(out.joins.len(), 1, "{:?}", out.joins);
+    let mut seen = HashSet::new();
+    for s in &out.shapes {
+        assert!(
+            seen.insert((s.frame, s.id)),
+            "({}, {}) twice",
+            s.frame,
+            s.id
+        );
+    }
+    for f in [31u32, 32] {
+        let s = out.shapes.iter().find(|s| s.frame == f).expect("a shape");
+        assert!(
+            (s.centroid.y - 200.0).abs() < 5.0,
+            "frame {f}: the older track's prediction {:?} was kept",
+            s.centroid
+        );
+    }
+}
+
 /// A track coasted past its last observation and never seen again: offline, the coasted tail
 /// is dropped by default and kept with `fill.coasted_tails`.
 #[test]

@@ -44,6 +44,7 @@ mod describe;
 mod estimate;
 pub mod features;
 mod fragments;
+pub mod gate;
 // Files on disk: the CLI and the Python package. It compiles for wasm32 too (the CLI does, for
 // `wasm-pack test`); the browser module never calls it, so none of it is linked there.
 pub mod from_files;

@@ -110,6 +110,8 @@ pub struct Tracker {
     cheap: CheapTerms,
     /// Whether the detector boxes visible parts ([`Config::complete_cut_boxes`]).
     cut: super::cut_views::CutJudge,
+    /// The unambiguous matches' costs ([`Config::adaptive_gate`]).
+    gate: super::gate::GateStats,
 }
 
 impl std::fmt::Debug for Tracker {
@@ -164,6 +166,7 @@ impl Tracker {
             noise: NoiseFit::default(),
             cheap: CheapTerms::default(),
             cut: Default::default(),
+            gate: Default::default(),
         })
     }
 
@@ -310,7 +313,12 @@ impl Tracker {
         });
         self.cheap = cheap;
         let matches = self.timed(Phase::Assignment, |t| {
-            t.associate(frame, &main, &regions, &mut dets)
+            let (matches, from_main) = t.associate(frame, &main, &regions, &mut dets)?;
+            if t.config.adaptive_gate.is_some() {
+                t.gate
+                    .observe(&main, &matches[..from_main], t.config.main_max_cost());
+            }
+            Ok::<_, TrackError>(matches)
         })?;
         let out = self.timed(Phase::Update, |t| {
             let mut det_used = vec![false; dets.len()];

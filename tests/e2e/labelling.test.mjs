@@ -393,14 +393,19 @@ test('bad files are refused with a message, not a crash', async () => {
 // flow's patch sums, variational refinement and global shift, the refinement's crop: 817.1 →
 // 821.6 KiB; `detect` at 854×480 ×0.70 the time in wasm, its masks unchanged on the 21 DAVIS
 // clips; the app's weights-free rate 11.4 → 15.9 fps, scripts/bench-learned-fps.mjs).
-test('wasm is at most 824 KB gzipped', () => {
+// 824 → 832 KB with the main association's gate from the sequence's own unambiguous matches
+// (`track::gate`; MOT15's detector models +1.5 / +1.9 HOTA online / offline) and the offline
+// pass keeping one coasted shape per identity and frame (joined tracks that both coasted
+// through a frame exported that identity twice): 823.4 → 829.5 KiB, most of it the offline
+// pass's code laid out anew (its fix alone: +2.6 KiB).
+test('wasm is at most 832 KB gzipped', () => {
   const dir = join(DIST, 'assets');
   const wasm = readdirSync(dir).filter((f) => f.endsWith('.wasm'));
   assert.equal(wasm.length, 1, 'one wasm module, shared by page and worker');
   const bytes = readFileSync(join(dir, wasm[0]));
   const gz = gzipSync(bytes, { level: 9 }).length;
   console.log(`wasm size: ${(bytes.length / 1024).toFixed(1)} KiB raw, ${(gz / 1024).toFixed(1)} KiB gzipped`);
-  assert.ok(gz <= 824 * 1024, `${gz} bytes gzipped`);
+  assert.ok(gz <= 832 * 1024, `${gz} bytes gzipped`);
 });
 
 test('edits not exported are never replaced without a question: demo, import and closing the tab ask first', async () => {

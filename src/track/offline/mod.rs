@@ -411,15 +411,31 @@ fn relink_measured(
         let e = last_seen.entry(s.id).or_insert(s.frame);
         *e = (*e).max(s.frame);
     }
-    let covered: std::collections::HashSet<(u64, u32)> =
+    let mut covered: std::collections::HashSet<(u64, u32)> =
         shapes.iter().map(|s| (s.id, s.frame)).collect();
+    // Where two joined tracks both coasted through one frame (a slave's predictions past its
+    // last observation and its master's after a miss), the later-started one's prediction is
+    // kept, as it rests on the later view: the coasted shapes are taken in that order, each
+    // only where its identity has no shape yet. (`pieces` come sorted by id.)
+    let started = |id: u64| match pieces.binary_search_by_key(&id, |p| p.id) {
+        Ok(k) => pieces[k].first,
+        Err(_) => 0,
+    };
+    let mut order: Vec<usize> = (0..coasted.len()).collect();
+    order.sort_unstable_by_key(|&i| (std::cmp::Reverse(started(coasted[i].id)), i));
+    let mut keep = vec![false; coasted.len()];
+    for i in order {
+        let s = &coasted[i];
+        let id = map.get(&s.id).copied().unwrap_or(s.id);
+        let tail = last_seen.get(&id).is_none_or(|&f| s.frame > f);
+        keep[i] = (config.fill.coasted_tails || !tail) && covered.insert((id, s.frame));
+    }
     let mut kept: Vec<TrackedShape> = coasted
         .into_iter()
-        .filter_map(|mut s| {
+        .zip(keep)
+        .filter_map(|(mut s, k)| {
             s.id = map.get(&s.id).copied().unwrap_or(s.id);
-            let tail = last_seen.get(&s.id).is_none_or(|&f| s.frame > f);
-            (!covered.contains(&(s.id, s.frame)) && (config.fill.coasted_tails || !tail))
-                .then_some(s)
+            k.then_some(s)
         })
         .collect();
     if config.min_track_seconds > 0.0 {

@@ -151,8 +151,8 @@ pub(crate) struct Piece {
     pub(crate) last: u32,
 }
 
-/// Groups shapes by id, each group sorted by frame. Shapes must be valid and unique per
-/// (frame, id) (checked by the caller).
+/// Groups shapes by id (the groups in increasing id), each group sorted by frame. Shapes must
+/// be valid and unique per (frame, id) (checked by the caller).
 pub(crate) fn pieces(shapes: &[TrackedShape]) -> Vec<Piece> {
     let mut by_id: std::collections::BTreeMap<u64, Vec<usize>> = Default::default();
     for (i, s) in shapes.iter().enumerate() {

@@ -74,29 +74,40 @@ impl Tracker {
         })
     }
 
-    /// Runs the association stages in turn (see [`super::super::associate`]).
+    /// Runs the association stages in turn (see [`super::super::associate`]); the matches,
+    /// and how many of them (the first) the main stage made. With
+    /// [`Config::adaptive_gate`] the main stage's gate is this sequence's (see
+    /// [`crate::track::gate`]).
     pub(super) fn associate(
         &self,
         frame: Option<&Frame<'_>>,
         main: &[Edge],
         regions: &Regions,
         dets: &mut [Prepared<'_>],
-    ) -> Result<Vec<Pair>, TrackError> {
+    ) -> Result<(Vec<Pair>, usize), TrackError> {
         let mut used = Used::new(self.tracks.len(), dets.len());
         let mut out = Vec::new();
         let policy = match self.config.unmatched_cost {
             Some(l) => Unmatched::Cost(l),
             None => Unmatched::MaxMatches,
         };
-        for stage in self.stages.for_frame(frame.is_some()) {
+        let mut from_main = 0;
+        for (i, stage) in self.stages.for_frame(frame.is_some()).iter().enumerate() {
+            let mut stage = *stage;
+            if let (0, Some(k)) = (i, self.config.adaptive_gate) {
+                stage.max_cost = self.gate.gate(stage.max_cost, k);
+            }
             let edges = match stage.costs {
                 StageCosts::Main => Cow::Borrowed(main),
                 StageCosts::Reid if self.reid_costs.terms().is_empty() => continue,
                 StageCosts::Reid => Cow::Owned(self.reid_edges(frame, regions, dets, &used)),
             };
             stage.run(&self.tracks, dets, &edges, policy, &mut used, &mut out)?;
+            if i == 0 {
+                from_main = out.len();
+            }
         }
-        Ok(out)
+        Ok((out, from_main))
     }
 
     /// The re-identification costs of the lost tracks' pairs with the high detections nobody
