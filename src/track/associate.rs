@@ -397,6 +397,7 @@ pub(crate) fn score_edges_reusing(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::track::lifecycle::HitView;
 
     #[test]
     fn the_main_stage_gate_follows_the_frame_rate() {
@@ -480,8 +481,15 @@ mod tests {
         let mut t = track();
         for frame in 2..=hits {
             let fit = &mut NoiseFit::default();
-            t.hit(&det, &Features::default(), frame, config, false, fit)
-                .unwrap();
+            t.hit(
+                &det,
+                &Features::default(),
+                frame,
+                config,
+                HitView::default(),
+                fit,
+            )
+            .unwrap();
         }
         assert_eq!((t.hits(), t.misses()), (hits, 0));
         let tracks = [a, t];

@@ -107,9 +107,6 @@ pub struct Track {
     evidence: f64,
     /// Consecutive frames without a match (0 when matched this or the previous frame).
     misses: u32,
-    /// Box detections are completed like masks: this sequence's detector boxes visible parts
-    /// (see [`super::Config::complete_cut_boxes`]; set by the tracker each frame).
-    boxes_cut: bool,
     /// Frame of the last match (tracker frame numbers, 1-based).
     last_frame: u32,
     /// The last matched detection.
@@ -137,6 +134,16 @@ impl std::fmt::Debug for Track {
             .field("last_frame", &self.last_frame)
             .finish_non_exhaustive()
     }
+}
+
+/// What the tracker knows of a matched view beyond the detection itself (see [`Track::hit`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct HitView {
+    /// The detector merged the view with a neighbour's.
+    pub(crate) merged: bool,
+    /// This sequence's detector boxes visible parts, so a box detection is completed like a
+    /// mask ([`super::Config::complete_cut_boxes`]).
+    pub(crate) boxes_cut: bool,
 }
 
 impl Track {
@@ -296,7 +303,6 @@ impl Track {
             hits: 1,
             evidence: 0.0,
             misses: 0,
-            boxes_cut: false,
             last_frame: frame,
             last: det.clone(),
             features: Some(features.clone()),
@@ -350,9 +356,10 @@ impl Track {
         features: &Features,
         frame: u32,
         cfg: &Config,
-        merged: bool,
+        view: HitView,
         fit: &mut NoiseFit,
     ) -> Result<(), MotionError> {
+        let HitView { merged, boxes_cut } = view;
         let area = features.area;
         let ratio = if self.ref_area > 0.0 && area > 0.0 {
             area / self.ref_area
@@ -360,7 +367,7 @@ impl Track {
             1.0
         };
         let whole = ratio >= cfg.appearance.whole_ratio;
-        let amodal = cfg.amodal && (det.mask.is_some() || self.boxes_cut);
+        let amodal = cfg.amodal && (det.mask.is_some() || boxes_cut);
         let z = if amodal {
             // The last detection tells which side stands still if it is recent; after a longer
             // gap the shape is reappearing and the occlusion that cut the last views is over.
@@ -423,12 +430,6 @@ impl Track {
         self.last = det.clone();
         self.features = Some(features.clone());
         Ok(())
-    }
-
-    /// Whether box detections are completed like masks from now on (the sequence's detector
-    /// boxes visible parts: [`super::Config::complete_cut_boxes`]).
-    pub(crate) fn set_boxes_cut(&mut self, v: bool) {
-        self.boxes_cut = v;
     }
 
     /// The track's latest appearance is `a`, and its reference appearance too when the shape

@@ -294,10 +294,6 @@ impl Tracker {
             if t.config.amodal && t.config.complete_cut_boxes && boxes_only {
                 let boxes: Vec<BBox> = detections.iter().map(|d| d.bbox).collect();
                 t.cut.observe(&boxes);
-                let cut = t.cut.cuts();
-                for tr in t.tracks.iter_mut() {
-                    tr.set_boxes_cut(cut);
-                }
             }
             frame_regions(&t.config, &t.tracks, &dets, frame.is_some())
         });

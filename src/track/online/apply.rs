@@ -8,7 +8,7 @@ use crate::track::associate::{in_main, Pair};
 use crate::track::config::ReportBox;
 use crate::track::describe::crowded_next_frame;
 use crate::track::fragments::merged_views;
-use crate::track::lifecycle::{two_mut, Track};
+use crate::track::lifecycle::{two_mut, HitView, Track};
 use crate::track::prepare::{shape_of, Prepared};
 use crate::track::TrackError;
 
@@ -27,6 +27,8 @@ impl Tracker {
         let mut matched = vec![false; self.tracks.len()];
         let mut confirming = Vec::new();
         let merged = merged_views(&self.tracks, matches, dets, &self.config.appearance);
+        // The judgement changes only when the judge sees a frame of box detections.
+        let boxes_cut = self.config.complete_cut_boxes && self.cut.cuts();
         for (m, merged) in matches.iter().zip(merged) {
             let (Some(d), true) = (dets.get(m.det), m.track < self.tracks.len()) else {
                 continue;
@@ -37,7 +39,8 @@ impl Tracker {
                 self.gaps.closed(t.misses());
             }
             let cfg = &self.config;
-            t.hit(&d.det, &d.features, frame, cfg, merged, &mut self.noise)?;
+            let view = HitView { merged, boxes_cut };
+            t.hit(&d.det, &d.features, frame, cfg, view, &mut self.noise)?;
             let enough = match self.config.birth_evidence {
                 Some(low) => {
                     let w = if d.det.score >= self.thresholds.birth {
@@ -90,7 +93,11 @@ impl Tracker {
                     let (l, newer) = two_mut(&mut self.tracks, lost, m.track);
                     self.gaps.closed(l.misses());
                     let cfg = &self.config;
-                    l.hit(&d.det, &d.features, frame, cfg, false, &mut self.noise)?;
+                    let view = HitView {
+                        merged: false,
+                        boxes_cut,
+                    };
+                    l.hit(&d.det, &d.features, frame, cfg, view, &mut self.noise)?;
                     l.absorb(newer);
                     lost
                 }
